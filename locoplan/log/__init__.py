@@ -1,0 +1,1 @@
+"""locoplan.log"""
