@@ -138,9 +138,7 @@ class DropTask(_TaskBase):
     @model_validator(mode="after")
     def _one_target(self) -> DropTask:
         if (self.onto is None) == (self.at is None):
-            raise ValueError(
-                "a drop needs exactly one target: 'onto: FIXTURE' or 'at: [x, y, z]'"
-            )
+            raise ValueError("a drop needs exactly one target: 'onto: FIXTURE' or 'at: [x, y, z]'")
         return self
 
 
