@@ -1,0 +1,514 @@
+"""Convex QP layer: the only module that imports a QP solver (proxsuite, piqp).
+
+Problem (all parts but ``H`` and ``g`` optional)::
+
+    minimise    1/2 x' H x + g' x
+    subject to  A x = b                      (n_eq rows)
+                l <= C x <= u                (n_in rows, two-sided, +-inf allowed)
+                x_lower <= x <= x_upper      (box, +-inf allowed)
+
+Matrices are dense numpy arrays, or ``scipy.sparse`` matrices for the sparse solvers
+(all of ``H``, ``A``, ``C`` sparse then). Absent bounds are ``+-inf``, never ``+-1e20``:
+piqp counts 1e20 as a finite bound and runs into its iteration limit.
+
+Dual convention of `QpSolution` (both backends mapped to it)::
+
+    H x + g + A' y_eq + C' z_in + z_box = 0
+
+with ``z_in > 0`` where an upper bound is active and ``< 0`` where a lower bound is.
+
+`QpSolver` keeps the backend's solver object and, while the problem keeps its dimensions
+(and, for sparse problems, its sparsity pattern), only updates the data. Warm starts are off
+by default: in closed loop with contact switches a warm-started proxsuite ran into its
+iteration limit on most stepping MPC QPs (see stack-notes.md).
+
+Neither proxsuite 0.8 nor piqp 0.7 has a wall-time limit; ``max_iter`` is the cap.
+proxsuite stops on primal/dual residuals alone by default and then may return a point 1e-5
+away from the optimum (duality gap 4e-5 on a 3-variable problem); the duality-gap check is
+therefore on by default for both backends.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Final, TypeAlias
+
+import numpy as np
+import numpy.typing as npt
+import piqp
+import scipy.sparse as sp
+from proxsuite import proxqp
+
+FloatArray = npt.NDArray[np.float64]
+# A dense FloatArray or a scipy.sparse matrix (scipy ships no type stubs here).
+Matrix: TypeAlias = Any
+
+BACKENDS: Final[tuple[str, ...]] = ("proxsuite", "piqp")
+
+_PROXSUITE_STATUS: Final[dict[Any, str]] = {
+    proxqp.PROXQP_SOLVED: "solved",
+    proxqp.PROXQP_MAX_ITER_REACHED: "max_iterations",
+    proxqp.PROXQP_PRIMAL_INFEASIBLE: "primal_infeasible",
+    proxqp.PROXQP_DUAL_INFEASIBLE: "dual_infeasible",
+    proxqp.PROXQP_SOLVED_CLOSEST_PRIMAL_FEASIBLE: "closest_primal_feasible",
+    proxqp.PROXQP_NOT_RUN: "not_run",
+}
+_PIQP_STATUS: Final[dict[Any, str]] = {
+    piqp.PIQP_SOLVED: "solved",
+    piqp.PIQP_MAX_ITER_REACHED: "max_iterations",
+    piqp.PIQP_PRIMAL_INFEASIBLE: "primal_infeasible",
+    piqp.PIQP_DUAL_INFEASIBLE: "dual_infeasible",
+    piqp.PIQP_NUMERICS: "numerical_error",
+    piqp.PIQP_UNSOLVED: "unsolved",
+    piqp.PIQP_INVALID_SETTINGS: "invalid_settings",
+}
+
+
+def _is_sparse(M: object) -> bool:
+    return bool(sp.issparse(M))
+
+
+def _check_vector(name: str, v: FloatArray | None, size: int) -> None:
+    if v is None:
+        return
+    if v.shape != (size,):
+        raise ValueError(f"QpProblem.{name} has shape {v.shape}, expected ({size},)")
+
+
+@dataclass(frozen=True, slots=True)
+class QpProblem:
+    """A convex QP: ``min 1/2 x'Hx + g'x`` s.t. ``Ax = b``, ``l <= Cx <= u``, box bounds.
+
+    Shapes: ``H`` (n, n) symmetric positive semidefinite, ``g`` (n,), ``A`` (n_eq, n),
+    ``b`` (n_eq,), ``C`` (n_in, n), ``l``/``u`` (n_in,), ``x_lower``/``x_upper`` (n,).
+    ``A``/``b`` come together, ``C`` needs at least one of ``l``/``u`` (the missing side is
+    taken as infinite); a box needs at least one of ``x_lower``/``x_upper``. Use ``+-inf`` for
+    absent bounds. Matrices are dense arrays, or all scipy.sparse for the sparse solvers.
+    """
+
+    H: Matrix
+    g: FloatArray
+    A: Matrix | None = None
+    b: FloatArray | None = None
+    C: Matrix | None = None
+    l: FloatArray | None = None
+    u: FloatArray | None = None
+    x_lower: FloatArray | None = None
+    x_upper: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        n = self.g.shape[0]
+        if self.g.ndim != 1:
+            raise ValueError(f"QpProblem.g must be 1-D, got shape {self.g.shape}")
+        if self.H.shape != (n, n):
+            raise ValueError(f"QpProblem.H has shape {self.H.shape}, expected ({n}, {n})")
+        if (self.A is None) != (self.b is None):
+            raise ValueError("QpProblem.A and QpProblem.b must be given together")
+        if self.A is not None:
+            assert self.b is not None
+            if self.A.shape != (self.b.shape[0], n):
+                raise ValueError(f"QpProblem.A has shape {self.A.shape}, expected (n_eq, {n})")
+            _check_vector("b", self.b, self.A.shape[0])
+        if self.C is not None:
+            if self.l is None and self.u is None:
+                raise ValueError("QpProblem.C needs l and/or u")
+            if self.C.ndim != 2 or self.C.shape[1] != n:
+                raise ValueError(f"QpProblem.C has shape {self.C.shape}, expected (n_in, {n})")
+            _check_vector("l", self.l, self.C.shape[0])
+            _check_vector("u", self.u, self.C.shape[0])
+        elif self.l is not None or self.u is not None:
+            raise ValueError("QpProblem.l/u given without C")
+        _check_vector("x_lower", self.x_lower, n)
+        _check_vector("x_upper", self.x_upper, n)
+        sparse = [_is_sparse(M) for M in (self.H, self.A, self.C) if M is not None]
+        if any(sparse) and not all(sparse):
+            raise ValueError("QpProblem: H, A, C must be all dense or all scipy.sparse")
+
+    @property
+    def n(self) -> int:
+        """Number of variables."""
+        return int(self.g.shape[0])
+
+    @property
+    def n_eq(self) -> int:
+        """Number of equality rows."""
+        return 0 if self.A is None else int(self.A.shape[0])
+
+    @property
+    def n_in(self) -> int:
+        """Number of two-sided inequality rows (the box not counted)."""
+        return 0 if self.C is None else int(self.C.shape[0])
+
+    @property
+    def has_box(self) -> bool:
+        """Whether box bounds on x are given."""
+        return self.x_lower is not None or self.x_upper is not None
+
+    @property
+    def is_sparse(self) -> bool:
+        """Whether the matrices are scipy.sparse."""
+        return _is_sparse(self.H)
+
+    def objective(self, x: FloatArray) -> float:
+        """``1/2 x'Hx + g'x`` at x (n,)."""
+        return float(0.5 * x @ (self.H @ x) + self.g @ x)
+
+
+@dataclass(frozen=True, slots=True)
+class QpSettings:
+    """Solver settings shared by the backends.
+
+    ``eps_abs``/``eps_rel`` bound the primal and dual residuals, ``eps_gap_abs``/
+    ``eps_gap_rel`` the duality gap (checked when ``check_duality_gap``). ``max_iter`` caps
+    the iterations (a problem that hits it is a failure). ``warm_start`` starts from the
+    previous solution (proxsuite only: piqp is an interior-point method and starts cold).
+    ``update_preconditioner`` recomputes proxsuite's equilibration when the matrices change.
+    """
+
+    eps_abs: float = 1e-8
+    eps_rel: float = 0.0
+    check_duality_gap: bool = True
+    eps_gap_abs: float = 1e-8
+    eps_gap_rel: float = 0.0
+    max_iter: int = 200
+    warm_start: bool = False
+    update_preconditioner: bool = True
+
+    def __post_init__(self) -> None:
+        if not (self.eps_abs > 0 and self.eps_rel >= 0):
+            raise ValueError("QpSettings: eps_abs must be > 0 and eps_rel >= 0")
+        if not (self.eps_gap_abs > 0 and self.eps_gap_rel >= 0):
+            raise ValueError("QpSettings: eps_gap_abs must be > 0 and eps_gap_rel >= 0")
+        if self.max_iter < 1:
+            raise ValueError("QpSettings.max_iter must be >= 1")
+
+
+@dataclass(frozen=True, slots=True)
+class QpSolution:
+    """Result of one solve.
+
+    ``x`` (n,) is the backend's last iterate (meaningful only when ``ok``). ``status`` is one
+    of "solved", "max_iterations", "primal_infeasible", "dual_infeasible",
+    "closest_primal_feasible", "numerical_error", "unsolved", "invalid_settings", "not_run",
+    "non_finite"; ``ok`` is True only for "solved" with a finite x. ``solve_time_s`` is the
+    wall time inside the solver library (data update/setup + solve, in s), of which
+    ``setup_time_s`` was the update/setup. Residuals are the backend's infinity norms.
+    Duals follow ``H x + g + A'y_eq + C'z_in + z_box = 0``.
+    """
+
+    x: FloatArray
+    status: str
+    ok: bool
+    iterations: int
+    solve_time_s: float
+    setup_time_s: float
+    primal_residual: float
+    dual_residual: float
+    objective: float
+    backend: str
+    reused: bool
+    y_eq: FloatArray = field(repr=False)
+    z_in: FloatArray = field(repr=False)
+    z_box: FloatArray = field(repr=False)
+
+
+def _inf_fill(v: FloatArray | None, size: int, sign: float) -> FloatArray:
+    return np.full(size, sign * math.inf) if v is None else v
+
+
+def _structure_key(p: QpProblem) -> tuple[object, ...]:
+    key: tuple[object, ...] = (p.is_sparse, p.n, p.n_eq, p.n_in, p.has_box)
+    if p.is_sparse:
+        for M in (p.H, p.A, p.C):
+            if M is None:
+                key += (None,)
+            else:
+                Mc = sp.csc_matrix(M)
+                key += (Mc.indptr.tobytes(), Mc.indices.tobytes())
+    return key
+
+
+class QpSolver:
+    """Stateful QP solver: keeps the backend object and re-uses it while dimensions hold.
+
+    ``backend`` is "proxsuite" or "piqp". Dense problems go to the dense solvers, sparse
+    problems to the sparse ones (proxsuite's sparse solver has no box: the box becomes
+    inequality rows there).
+    """
+
+    def __init__(self, backend: str = "proxsuite", settings: QpSettings | None = None) -> None:
+        if backend not in BACKENDS:
+            raise ValueError(f"unknown QP backend {backend!r}, expected one of {BACKENDS}")
+        self.backend = backend
+        self.settings = settings if settings is not None else QpSettings()
+        self._solver: Any = None
+        self._key: tuple[object, ...] | None = None
+        self._has_result = False
+
+    def reset(self) -> None:
+        """Forget the solver object (the next solve sets it up from scratch)."""
+        self._solver = None
+        self._key = None
+        self._has_result = False
+
+    def solve(self, problem: QpProblem) -> QpSolution:
+        """Solve ``problem``; never raises on solver failure (check ``ok``/``status``)."""
+        key = _structure_key(problem)
+        reuse = self._solver is not None and key == self._key
+        if self.backend == "proxsuite":
+            if problem.is_sparse:
+                return self._solve_proxsuite_sparse(problem, reuse, key)
+            return self._solve_proxsuite_dense(problem, reuse, key)
+        return self._solve_piqp(problem, reuse, key)
+
+    # --- proxsuite -------------------------------------------------------------------------
+
+    def _configure_proxsuite(self, qp: Any) -> None:
+        s = self.settings
+        qp.settings.eps_abs = s.eps_abs
+        qp.settings.eps_rel = s.eps_rel
+        qp.settings.check_duality_gap = s.check_duality_gap
+        qp.settings.eps_duality_gap_abs = s.eps_gap_abs
+        qp.settings.eps_duality_gap_rel = s.eps_gap_rel
+        qp.settings.max_iter = s.max_iter
+        qp.settings.verbose = False
+        qp.settings.compute_timings = False
+
+    def _set_proxsuite_guess(self, qp: Any) -> None:
+        if self.settings.warm_start and self._has_result:
+            qp.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
+        else:
+            qp.settings.initial_guess = proxqp.InitialGuess.EQUALITY_CONSTRAINED_INITIAL_GUESS
+
+    def _solve_proxsuite_dense(
+        self, p: QpProblem, reuse: bool, key: tuple[object, ...]
+    ) -> QpSolution:
+        n, n_in = p.n, p.n_in
+        l = _inf_fill(p.l, n_in, -1.0) if p.C is not None else None
+        u = _inf_fill(p.u, n_in, 1.0) if p.C is not None else None
+        lb = _inf_fill(p.x_lower, n, -1.0) if p.has_box else None
+        ub = _inf_fill(p.x_upper, n, 1.0) if p.has_box else None
+        t0 = time.perf_counter()
+        if reuse:
+            qp = self._solver
+            self._set_proxsuite_guess(qp)
+            if p.has_box:
+                qp.update(
+                    p.H,
+                    p.g,
+                    p.A,
+                    p.b,
+                    p.C,
+                    l,
+                    u,
+                    lb,
+                    ub,
+                    update_preconditioner=self.settings.update_preconditioner,
+                )
+            else:
+                qp.update(
+                    p.H,
+                    p.g,
+                    p.A,
+                    p.b,
+                    p.C,
+                    l,
+                    u,
+                    update_preconditioner=self.settings.update_preconditioner,
+                )
+        else:
+            qp = proxqp.dense.QP(n, p.n_eq, n_in, p.has_box)
+            self._configure_proxsuite(qp)
+            qp.settings.initial_guess = proxqp.InitialGuess.EQUALITY_CONSTRAINED_INITIAL_GUESS
+            if p.has_box:
+                qp.init(p.H, p.g, p.A, p.b, p.C, l, u, lb, ub)
+            else:
+                qp.init(p.H, p.g, p.A, p.b, p.C, l, u)
+            self._solver, self._key = qp, key
+        t1 = time.perf_counter()
+        qp.solve()
+        t2 = time.perf_counter()
+        r = qp.results
+        z = np.asarray(r.z, dtype=np.float64)
+        z_box = z[n_in:].copy() if p.has_box else np.zeros(n)
+        return self._finish(
+            p,
+            r.x,
+            _PROXSUITE_STATUS.get(r.info.status, str(r.info.status)),
+            int(r.info.iter),
+            t2 - t0,
+            t1 - t0,
+            float(r.info.pri_res),
+            float(r.info.dua_res),
+            reuse,
+            r.y,
+            z[:n_in].copy(),
+            z_box,
+        )
+
+    def _solve_proxsuite_sparse(
+        self, p: QpProblem, reuse: bool, key: tuple[object, ...]
+    ) -> QpSolution:
+        # proxsuite's sparse solver has no box: stack it under C as identity rows.
+        n = p.n
+        C_rows: list[Any] = []
+        l_parts: list[FloatArray] = []
+        u_parts: list[FloatArray] = []
+        if p.C is not None:
+            C_rows.append(p.C)
+            l_parts.append(_inf_fill(p.l, p.n_in, -1.0))
+            u_parts.append(_inf_fill(p.u, p.n_in, 1.0))
+        if p.has_box:
+            C_rows.append(sp.identity(n, format="csc"))
+            l_parts.append(_inf_fill(p.x_lower, n, -1.0))
+            u_parts.append(_inf_fill(p.x_upper, n, 1.0))
+        C = sp.csc_matrix(sp.vstack(C_rows)) if C_rows else None
+        l = np.concatenate(l_parts) if C_rows else None
+        u = np.concatenate(u_parts) if C_rows else None
+        H = sp.csc_matrix(p.H)
+        A = sp.csc_matrix(p.A) if p.A is not None else None
+        n_c = 0 if C is None else C.shape[0]
+        t0 = time.perf_counter()
+        if reuse:
+            qp = self._solver
+            self._set_proxsuite_guess(qp)
+            qp.update(
+                H, p.g, A, p.b, C, l, u, update_preconditioner=self.settings.update_preconditioner
+            )
+        else:
+            qp = proxqp.sparse.QP(n, p.n_eq, n_c)
+            self._configure_proxsuite(qp)
+            qp.settings.initial_guess = proxqp.InitialGuess.EQUALITY_CONSTRAINED_INITIAL_GUESS
+            qp.init(H, p.g, A, p.b, C, l, u)
+            self._solver, self._key = qp, key
+        t1 = time.perf_counter()
+        qp.solve()
+        t2 = time.perf_counter()
+        r = qp.results
+        z = np.asarray(r.z, dtype=np.float64)
+        z_box = z[p.n_in :].copy() if p.has_box else np.zeros(n)
+        return self._finish(
+            p,
+            r.x,
+            _PROXSUITE_STATUS.get(r.info.status, str(r.info.status)),
+            int(r.info.iter),
+            t2 - t0,
+            t1 - t0,
+            float(r.info.pri_res),
+            float(r.info.dua_res),
+            reuse,
+            r.y,
+            z[: p.n_in].copy(),
+            z_box,
+        )
+
+    # --- piqp ------------------------------------------------------------------------------
+
+    def _solve_piqp(self, p: QpProblem, reuse: bool, key: tuple[object, ...]) -> QpSolution:
+        n, n_in = p.n, p.n_in
+        l = _inf_fill(p.l, n_in, -1.0) if p.C is not None else None
+        u = _inf_fill(p.u, n_in, 1.0) if p.C is not None else None
+        lb = _inf_fill(p.x_lower, n, -1.0) if p.has_box else None
+        ub = _inf_fill(p.x_upper, n, 1.0) if p.has_box else None
+        if p.is_sparse:
+            # piqp reads the upper triangle of P only.
+            H: Any = sp.triu(p.H, format="csc")
+            A: Any = sp.csc_matrix(p.A) if p.A is not None else None
+            C: Any = sp.csc_matrix(p.C) if p.C is not None else None
+        else:
+            # Column-major avoids a copy inside the binding; H is symmetric so H.T is free.
+            H = p.H.T
+            A = np.asfortranarray(p.A) if p.A is not None else None
+            C = np.asfortranarray(p.C) if p.C is not None else None
+        t0 = time.perf_counter()
+        if reuse:
+            solver = self._solver
+            solver.update(H, p.g, A, p.b, C, l, u, lb, ub)
+        else:
+            solver = piqp.SparseSolver() if p.is_sparse else piqp.DenseSolver()
+            s = self.settings
+            solver.settings.eps_abs = s.eps_abs
+            solver.settings.eps_rel = s.eps_rel
+            solver.settings.check_duality_gap = s.check_duality_gap
+            solver.settings.eps_duality_gap_abs = s.eps_gap_abs
+            solver.settings.eps_duality_gap_rel = s.eps_gap_rel
+            solver.settings.max_iter = s.max_iter
+            solver.settings.verbose = False
+            solver.settings.compute_timings = False
+            solver.setup(H, p.g, A, p.b, C, l, u, lb, ub)
+            self._solver, self._key = solver, key
+        t1 = time.perf_counter()
+        status = solver.solve()
+        t2 = time.perf_counter()
+        r = solver.result
+        z_in = np.asarray(r.z_u, dtype=np.float64) - np.asarray(r.z_l, dtype=np.float64)
+        if p.has_box:
+            z_box = np.asarray(r.z_bu, dtype=np.float64) - np.asarray(r.z_bl, dtype=np.float64)
+        else:
+            z_box = np.zeros(n)
+        return self._finish(
+            p,
+            r.x,
+            _PIQP_STATUS.get(status, str(status)),
+            int(r.info.iter),
+            t2 - t0,
+            t1 - t0,
+            float(r.info.primal_res),
+            float(r.info.dual_res),
+            reuse,
+            r.y,
+            z_in[:n_in],
+            z_box,
+        )
+
+    # --- common ----------------------------------------------------------------------------
+
+    def _finish(
+        self,
+        p: QpProblem,
+        x_raw: Any,
+        status: str,
+        iterations: int,
+        solve_time_s: float,
+        setup_time_s: float,
+        pri: float,
+        dua: float,
+        reused: bool,
+        y: Any,
+        z_in: FloatArray,
+        z_box: FloatArray,
+    ) -> QpSolution:
+        x = np.array(x_raw, dtype=np.float64)
+        finite = bool(np.all(np.isfinite(x)))
+        if status == "solved" and not finite:
+            status = "non_finite"
+        ok = status == "solved"
+        self._has_result = ok
+        if not ok and self.settings.warm_start:
+            # A failed iterate is a bad warm start; the next solve starts cold.
+            self._has_result = False
+        return QpSolution(
+            x=x,
+            status=status,
+            ok=ok,
+            iterations=iterations,
+            solve_time_s=solve_time_s,
+            setup_time_s=setup_time_s,
+            primal_residual=pri,
+            dual_residual=dua,
+            objective=p.objective(x) if finite else math.nan,
+            backend=self.backend,
+            reused=reused,
+            y_eq=np.array(y, dtype=np.float64).reshape(-1)[: p.n_eq],
+            z_in=z_in,
+            z_box=z_box,
+        )
+
+
+def solve_qp(
+    problem: QpProblem, backend: str = "proxsuite", settings: QpSettings | None = None
+) -> QpSolution:
+    """One-shot solve with a fresh `QpSolver` (for tests and scripts; loops keep a solver)."""
+    return QpSolver(backend, settings).solve(problem)

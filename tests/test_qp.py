@@ -1,0 +1,200 @@
+"""Tests of locoplan.control.qp against problems with known optima, on both backends.
+
+Tolerances: the solvers run at eps_abs = 1e-9 on these well-conditioned problems (condition
+numbers below 1e3), so 1e-6 on x leaves three orders of margin for the solvers' regularisation
+and for the difference between interior-point (piqp) and augmented-Lagrangian (proxsuite)
+end points.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from locoplan.control.qp import BACKENDS, QpProblem, QpSettings, QpSolver, solve_qp
+
+TIGHT = QpSettings(eps_abs=1e-9, eps_gap_abs=1e-9)
+TOL = 1e-6  # see the module docstring
+
+
+def _kkt_equality_ls(D: np.ndarray, e: np.ndarray, A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Closed form of min 1/2 |D x - e|^2 s.t. A x = b through the KKT system."""
+    n, m = D.shape[1], A.shape[0]
+    K = np.block([[D.T @ D, A.T], [A, np.zeros((m, m))]])
+    rhs = np.concatenate([D.T @ e, b])
+    return np.linalg.solve(K, rhs)[:n]
+
+
+def _stationarity(p: QpProblem, sol) -> np.ndarray:  # type: ignore[no-untyped-def]
+    r = p.H @ sol.x + p.g + sol.z_box
+    if p.A is not None:
+        r = r + p.A.T @ sol.y_eq
+    if p.C is not None:
+        r = r + p.C.T @ sol.z_in
+    return np.asarray(r)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_equality_constrained_least_squares(backend: str) -> None:
+    rng = np.random.default_rng(0)
+    D = rng.normal(size=(8, 5))
+    e = rng.normal(size=8)
+    A = rng.normal(size=(2, 5))
+    b = rng.normal(size=2)
+    p = QpProblem(H=D.T @ D, g=-D.T @ e, A=A, b=b)
+    sol = solve_qp(p, backend, TIGHT)
+    assert sol.ok and sol.status == "solved"
+    np.testing.assert_allclose(sol.x, _kkt_equality_ls(D, e, A, b), atol=TOL)
+    np.testing.assert_allclose(A @ sol.x, b, atol=TOL)
+    # Duals in the documented convention: H x + g + A'y = 0 (1e-6: dual residual tolerance).
+    np.testing.assert_allclose(_stationarity(p, sol), 0.0, atol=TOL)
+    assert math.isclose(sol.objective, p.objective(sol.x))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_active_box(backend: str) -> None:
+    # min 1/2 |x - c|^2 on a box: the optimum is the clipped c; two bounds active, one side
+    # of the box infinite.
+    c = np.array([2.0, -3.0, 0.5, 0.1])
+    lo = np.array([-1.0, -1.0, -np.inf, -1.0])
+    hi = np.array([1.0, np.inf, 1.0, 1.0])
+    p = QpProblem(H=np.eye(4), g=-c, x_lower=lo, x_upper=hi)
+    sol = solve_qp(p, backend, TIGHT)
+    assert sol.ok
+    np.testing.assert_allclose(sol.x, np.clip(c, lo, hi), atol=TOL)
+    # Box multipliers: +1 on the active upper bound (x0), -2 on the active lower (x1).
+    np.testing.assert_allclose(sol.z_box, [1.0, -2.0, 0.0, 0.0], atol=TOL)
+    np.testing.assert_allclose(_stationarity(p, sol), 0.0, atol=TOL)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_active_inequality(backend: str) -> None:
+    # Projection of c onto the half-space a'x <= beta, written two-sided with l = -inf, plus
+    # an inactive second row with both sides finite.
+    c = np.array([1.0, 2.0, 3.0])
+    a = np.array([1.0, 1.0, 1.0])
+    beta = 2.0
+    C = np.vstack([a, [1.0, -1.0, 0.0]])
+    p = QpProblem(H=np.eye(3), g=-c, C=C, l=np.array([-np.inf, -5.0]), u=np.array([beta, 5.0]))
+    expected = c - (a @ c - beta) / (a @ a) * a
+    sol = solve_qp(p, backend, TIGHT)
+    assert sol.ok
+    np.testing.assert_allclose(sol.x, expected, atol=TOL)
+    np.testing.assert_allclose(sol.z_in, [(a @ c - beta) / (a @ a), 0.0], atol=TOL)
+    np.testing.assert_allclose(_stationarity(p, sol), 0.0, atol=TOL)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_infeasible_is_not_ok(backend: str) -> None:
+    # x0 + x1 = 1 with 0 <= x <= 0.4 has no solution.
+    p = QpProblem(
+        H=np.eye(2),
+        g=np.zeros(2),
+        A=np.ones((1, 2)),
+        b=np.array([1.0]),
+        x_lower=np.zeros(2),
+        x_upper=np.full(2, 0.4),
+    )
+    sol = solve_qp(p, backend, QpSettings(max_iter=200))
+    assert not sol.ok
+    assert sol.status in {"primal_infeasible", "max_iterations", "closest_primal_feasible"}
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_iteration_cap_is_not_ok(backend: str) -> None:
+    rng = np.random.default_rng(1)
+    M = rng.normal(size=(20, 20))
+    p = QpProblem(
+        H=M @ M.T + np.eye(20),
+        g=rng.normal(size=20),
+        C=rng.normal(size=(15, 20)),
+        l=-np.ones(15),
+        u=np.ones(15) * 0.1,
+    )
+    sol = solve_qp(p, backend, QpSettings(max_iter=1))
+    assert not sol.ok and sol.status == "max_iterations"
+
+
+def _random_problem(seed: int, sparse: bool = False) -> QpProblem:
+    """A whole-body-QP-like problem: 38 variables, 6 equalities, 30 inequalities, a box."""
+    rng = np.random.default_rng(seed)
+    n = 38
+    M = rng.normal(size=(n, n))
+    H = M @ M.T / n + 0.1 * np.eye(n)
+    g = rng.normal(size=n)
+    A = rng.normal(size=(6, n))
+    b = rng.normal(size=6) * 0.1
+    C = rng.normal(size=(30, n))
+    l = np.full(30, -0.5)
+    l[::3] = -np.inf
+    u = np.full(30, 0.5)
+    lo = np.full(n, -1.0)
+    hi = np.full(n, 1.0)
+    hi[::4] = np.inf
+    if sparse:
+        return QpProblem(
+            H=sp.csc_matrix(H),
+            g=g,
+            A=sp.csc_matrix(A),
+            b=b,
+            C=sp.csc_matrix(C),
+            l=l,
+            u=u,
+            x_lower=lo,
+            x_upper=hi,
+        )
+    return QpProblem(H=H, g=g, A=A, b=b, C=C, l=l, u=u, x_lower=lo, x_upper=hi)
+
+
+def test_backends_agree_dense_and_sparse() -> None:
+    for seed in range(5):
+        sols = [
+            solve_qp(_random_problem(seed, sparse), b, TIGHT)
+            for b in BACKENDS
+            for sparse in (False, True)
+        ]
+        for s in sols:
+            assert s.ok, s.status
+            np.testing.assert_allclose(s.x, sols[0].x, atol=TOL)
+            assert math.isclose(s.objective, sols[0].objective, rel_tol=1e-7, abs_tol=1e-7)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("warm_start", [False, True])
+def test_reuse_matches_fresh_solver(backend: str, warm_start: bool) -> None:
+    solver = QpSolver(backend, QpSettings(eps_abs=1e-9, eps_gap_abs=1e-9, warm_start=warm_start))
+    for seed in range(4):
+        p = _random_problem(seed)
+        s = solver.solve(p)
+        fresh = solve_qp(p, backend, TIGHT)
+        assert s.ok and fresh.ok
+        assert s.reused == (seed > 0)
+        np.testing.assert_allclose(s.x, fresh.x, atol=TOL)
+        assert s.solve_time_s >= s.setup_time_s >= 0.0
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_dimension_change_rebuilds(backend: str) -> None:
+    solver = QpSolver(backend, TIGHT)
+    s1 = solver.solve(QpProblem(H=np.eye(2), g=-np.ones(2)))
+    s2 = solver.solve(QpProblem(H=np.eye(3), g=-np.ones(3), x_upper=np.full(3, 0.5)))
+    assert s1.ok and s2.ok and not s2.reused
+    np.testing.assert_allclose(s2.x, 0.5, atol=TOL)
+
+
+def test_bad_arguments_rejected() -> None:
+    with pytest.raises(ValueError):
+        QpProblem(H=np.eye(3), g=np.zeros(2))
+    with pytest.raises(ValueError):
+        QpProblem(H=np.eye(2), g=np.zeros(2), A=np.ones((1, 2)))
+    with pytest.raises(ValueError):
+        QpProblem(H=np.eye(2), g=np.zeros(2), C=np.ones((1, 2)))
+    with pytest.raises(ValueError):
+        QpProblem(H=np.eye(2), g=np.zeros(2), x_lower=np.zeros(3))
+    with pytest.raises(ValueError):
+        QpSolver("osqp")
+    with pytest.raises(ValueError):
+        QpSettings(max_iter=0)
