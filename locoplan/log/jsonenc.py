@@ -1,0 +1,123 @@
+"""JSON encoding of log payloads and JSON Schema inference.
+
+Payloads are mappings of numbers, strings, booleans, None, numpy arrays and scalars, lists,
+tuples and nested mappings. They are written as strict JSON (RFC 8259): non-finite floats
+(NaN, +-inf) become ``null`` because JSON has no literal for them and Foxglove's parser
+rejects the ``NaN`` token Python would otherwise write.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+JsonSchema = dict[str, Any]
+
+
+def _default(obj: object) -> Any:
+    """Fallback of the fast encoder for the types `json` does not know (numpy, mappings)."""
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.floating):
+        return float(obj)
+    if isinstance(obj, Mapping):
+        return dict(obj)
+    raise TypeError(f"cannot write a {type(obj).__name__} to a JSON log channel")
+
+
+_ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=True, default=_default)
+_STRICT_ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
+
+
+def to_jsonable(value: Any) -> Any:
+    """Return `value` as plain JSON types: numpy arrays become (nested) lists, numpy scalars
+    Python scalars, tuples lists, and non-finite floats None.
+
+    Raises TypeError for anything else (objects, sets, bytes), and for non-string keys.
+    """
+    if value is None or isinstance(value, bool | str):
+        return value
+    if isinstance(value, float):  # includes np.float64
+        return value if math.isfinite(value) else None
+    if isinstance(value, int):
+        return int(value)
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind == "f" and not np.isfinite(value).all():
+            return to_jsonable(value.tolist())
+        if value.dtype.kind not in "biuf":
+            raise TypeError(f"cannot write a numpy array of dtype {value.dtype} to a JSON log")
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return to_jsonable(value.item())
+    if isinstance(value, Mapping):
+        out = {}
+        for key, item in value.items():
+            if not isinstance(key, str):
+                raise TypeError(f"JSON log keys must be str, got {key!r}")
+            out[key] = to_jsonable(item)
+        return out
+    if isinstance(value, list | tuple):
+        return [to_jsonable(item) for item in value]
+    raise TypeError(f"cannot write a {type(value).__name__} to a JSON log channel")
+
+
+def encode_json(payload: Mapping[str, Any]) -> bytes:
+    """Encode one payload as compact strict JSON (UTF-8).
+
+    The fast path lets the C encoder do the work; only when its output contains a NaN or
+    Infinity token (or a string that merely looks like one) is the payload converted by
+    `to_jsonable` and encoded again.
+    """
+    text = _ENCODER.encode(payload)
+    if "NaN" in text or "Infinity" in text:
+        text = _STRICT_ENCODER.encode(to_jsonable(payload))
+    return text.encode("utf-8")
+
+
+def infer_schema(payload: Mapping[str, Any], title: str) -> JsonSchema:
+    """JSON Schema (draft 2020-12 subset) describing `payload`, named `title`.
+
+    Numbers (int or float) map to ``number`` so a field that starts as 0 may later hold 0.5;
+    numpy arrays map to nested ``array`` of ``number``/``boolean`` by dimension; lists take
+    their item type from their first element (an empty list gets unconstrained items); None
+    gets an unconstrained schema. Later payloads are not checked against it.
+    """
+    if not isinstance(payload, Mapping):
+        raise TypeError(f"a JSON log payload must be a mapping, got {type(payload).__name__}")
+    schema = _schema_of(payload)
+    schema["title"] = title
+    return schema
+
+
+def _schema_of(value: Any) -> JsonSchema:
+    if value is None:
+        return {}
+    if isinstance(value, bool | np.bool_):
+        return {"type": "boolean"}
+    if isinstance(value, int | float | np.integer | np.floating):
+        return {"type": "number"}
+    if isinstance(value, str):
+        return {"type": "string"}
+    if isinstance(value, np.ndarray):
+        leaf: JsonSchema = {"type": "boolean"} if value.dtype.kind == "b" else {"type": "number"}
+        for _ in range(value.ndim):
+            leaf = {"type": "array", "items": leaf}
+        return leaf
+    if isinstance(value, Mapping):
+        props = {}
+        for key, item in value.items():
+            if not isinstance(key, str):
+                raise TypeError(f"JSON log keys must be str, got {key!r}")
+            props[key] = _schema_of(item)
+        return {"type": "object", "properties": props}
+    if isinstance(value, list | tuple):
+        return {"type": "array", "items": _schema_of(value[0]) if len(value) else {}}
+    raise TypeError(f"cannot write a {type(value).__name__} to a JSON log channel")
