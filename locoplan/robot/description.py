@@ -1,0 +1,325 @@
+"""Robot description: `robots/<name>/robot.yaml` plus its MJCF file, checked against each other.
+
+`load_robot_description("hector")` reads the YAML (limits, frame roles, nominal pose),
+compiles the MJCF with MuJoCo once to read the total mass and to check that joint order,
+joint ranges, actuator order and torque ranges, sites and the nominal keyframe agree with
+the YAML. Everything downstream (MuJoCo plant, pinocchio model, controller) takes the
+resulting `RobotDescription`; nothing else reads robot files.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+from ruamel.yaml import YAML
+from ruamel.yaml.error import YAMLError
+
+import locoplan
+from locoplan.exceptions import RobotDescriptionError
+
+ROBOTS_DIR_ENV = "LOCOPLAN_ROBOTS_DIR"
+SIDES = ("L", "R")
+# Tolerances of the YAML <-> MJCF cross-check: the YAML states angles to 1e-6 deg.
+_ANGLE_TOL = 1e-7  # rad
+_LENGTH_TOL = 1e-9  # m, N m
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class RobotDescription:
+    """A robot's limits, frames and nominal pose, in SI units and radians.
+
+    Joint arrays have shape (n_joints,) and follow `joint_names`, which is the MJCF tree
+    order, the actuator order and pinocchio's joint order after the free flyer. Side-indexed
+    tuples are in ("L", "R") order. Arrays are read-only.
+    """
+
+    name: str
+    mjcf_path: Path
+    joint_names: tuple[str, ...]
+    torque_limits: NDArray[np.float64]  # N m, symmetric: |tau_i| <= torque_limits[i]
+    velocity_limits: NDArray[np.float64]  # rad/s, symmetric
+    q_lower: NDArray[np.float64]  # rad
+    q_upper: NDArray[np.float64]  # rad
+    trunk_body: str
+    imu_site: str
+    foot_frames: tuple[str, str]  # sole sites, ("L", "R")
+    hand_frames: tuple[str, str]  # hand contact sites, ("L", "R")
+    foot_toe: float  # m ahead of the sole site along the foot's x axis
+    foot_heel: float  # m behind the sole site
+    nominal_keyframe: str
+    q_joints_nominal: NDArray[np.float64]  # rad
+    base_height_nominal: float  # trunk origin above the soles in the nominal pose, m
+    fall_height: float  # trunk origin below this height means fallen, m
+    total_mass: float  # kg, from the MJCF
+    leg_joint_indices: tuple[NDArray[np.intp], NDArray[np.intp]]  # into joint_names, ("L","R")
+    arm_joint_indices: tuple[NDArray[np.intp], NDArray[np.intp]]
+
+    @property
+    def n_joints(self) -> int:
+        """Number of actuated joints."""
+        return len(self.joint_names)
+
+    @property
+    def base_frame(self) -> str:
+        """Frame of the floating base: the trunk body (MuJoCo body, pinocchio BODY frame)."""
+        return self.trunk_body
+
+
+def robots_dir() -> Path:
+    """The directory holding `<name>/robot.yaml`: $LOCOPLAN_ROBOTS_DIR or `<repo>/robots`."""
+    override = os.environ.get(ROBOTS_DIR_ENV)
+    if override:
+        return Path(override)
+    return Path(locoplan.__file__).resolve().parents[1] / "robots"
+
+
+def resolve_robot_yaml(name_or_path: str) -> Path:
+    """Path of the robot.yaml for a robot name, a robot directory or a robot.yaml path."""
+    candidate = Path(name_or_path)
+    if candidate.suffix in (".yaml", ".yml"):
+        path = candidate
+    elif candidate.is_dir():
+        path = candidate / "robot.yaml"
+    else:
+        path = robots_dir() / name_or_path / "robot.yaml"
+    if not path.is_file():
+        raise RobotDescriptionError(
+            f"robot {name_or_path!r}: no robot description at {path} "
+            f"(robots directory: {robots_dir()}, override with ${ROBOTS_DIR_ENV})"
+        )
+    return path
+
+
+def load_robot_description(name_or_path: str = "hector") -> RobotDescription:
+    """Load and cross-check a robot description.
+
+    `name_or_path` is a robot name (looked up as `<robots_dir()>/<name>/robot.yaml`), a
+    robot directory or the path of a robot.yaml. Raises `RobotDescriptionError` with the
+    file and the offending entry when anything is missing or inconsistent.
+    """
+    path = resolve_robot_yaml(name_or_path)
+    try:
+        raw = YAML(typ="safe").load(path.read_text())
+    except (OSError, YAMLError) as exc:
+        raise RobotDescriptionError(f"{path}: cannot read YAML: {exc}") from exc
+    reader = _Reader(path, raw)
+
+    joints = reader.get_list("joints")
+    names: list[str] = []
+    torque, velocity, lower, upper = [], [], [], []
+    for i, entry in enumerate(joints):
+        row = _Reader(path, entry, f"joints[{i}]")
+        names.append(row.get_str("name"))
+        torque.append(row.get_positive("torque_Nm"))
+        velocity.append(row.get_positive("velocity_rad_s"))
+        lo, hi = row.get_pair("range_deg")
+        if not lo < hi:
+            raise reader.error(f"joints[{i}].range_deg: lower {lo} must be below upper {hi}")
+        lower.append(np.radians(lo))
+        upper.append(np.radians(hi))
+    if len(set(names)) != len(names):
+        raise reader.error(f"joints: duplicate joint names in {names}")
+    joint_names = tuple(names)
+
+    legs = tuple(_indices(reader, "legs", side, joint_names) for side in SIDES)
+    arms = tuple(_indices(reader, "arms", side, joint_names) for side in SIDES)
+    limbs = np.sort(np.concatenate([*legs, *arms]))
+    if not np.array_equal(limbs, np.arange(len(joint_names))):
+        raise reader.error("legs and arms must list every joint exactly once")
+
+    contacts = reader.get_sub("contacts")
+    feet, hands = contacts.get_sub("feet"), contacts.get_sub("hands")
+    foot = reader.get_sub("foot")
+    nominal = reader.get_sub("nominal")
+    nominal_deg = nominal.get_sub("joints_deg")
+    if set(nominal_deg.keys()) != set(joint_names):
+        raise nominal_deg.error(
+            f"must give exactly the joints {list(joint_names)}, got {list(nominal_deg.keys())}"
+        )
+    q_nominal = np.radians([nominal_deg.get_float(n) for n in joint_names])
+
+    mjcf_path = (path.parent / reader.get_str("mjcf")).resolve()
+    desc = RobotDescription(
+        name=reader.get_str("name"),
+        mjcf_path=mjcf_path,
+        joint_names=joint_names,
+        torque_limits=_frozen(torque),
+        velocity_limits=_frozen(velocity),
+        q_lower=_frozen(lower),
+        q_upper=_frozen(upper),
+        trunk_body=reader.get_str("trunk_body"),
+        imu_site=reader.get_str("imu_site"),
+        foot_frames=(feet.get_str("L"), feet.get_str("R")),
+        hand_frames=(hands.get_str("L"), hands.get_str("R")),
+        foot_toe=foot.get_positive("toe"),
+        foot_heel=foot.get_positive("heel"),
+        nominal_keyframe=reader.get_str("nominal_keyframe"),
+        q_joints_nominal=_frozen(q_nominal),
+        base_height_nominal=nominal.get_positive("trunk_height"),
+        fall_height=reader.get_positive("fall_height"),
+        total_mass=0.0,
+        leg_joint_indices=(legs[0], legs[1]),
+        arm_joint_indices=(arms[0], arms[1]),
+    )
+    if np.any(desc.q_joints_nominal < desc.q_lower) or np.any(desc.q_joints_nominal > desc.q_upper):
+        raise nominal_deg.error("nominal joint angles must lie within the joint ranges")
+    if not desc.fall_height < desc.base_height_nominal:
+        raise reader.error("fall_height must be below nominal.trunk_height")
+    return replace(desc, total_mass=_check_mjcf(desc, path))
+
+
+def _check_mjcf(desc: RobotDescription, yaml_path: Path) -> float:
+    """Compile the MJCF, check it against the YAML, return the total mass (kg)."""
+    where = f"{yaml_path} vs {desc.mjcf_path}"
+    if not desc.mjcf_path.is_file():
+        raise RobotDescriptionError(f"{yaml_path}: MJCF file {desc.mjcf_path} not found")
+    try:
+        model = mujoco.MjModel.from_xml_path(str(desc.mjcf_path))
+    except ValueError as exc:
+        raise RobotDescriptionError(f"{desc.mjcf_path}: MuJoCo cannot compile it: {exc}") from exc
+
+    n = desc.n_joints
+    if not _has(model, mujoco.mjtObj.mjOBJ_BODY, desc.trunk_body):
+        raise RobotDescriptionError(f"{where}: trunk body {desc.trunk_body!r} missing")
+    trunk = model.body(desc.trunk_body).id
+    root_jnt = int(model.body_jntadr[trunk])
+    if (
+        model.body_jntnum[trunk] != 1
+        or model.jnt_type[root_jnt] != mujoco.mjtJoint.mjJNT_FREE
+        or model.nq != 7 + n
+    ):
+        raise RobotDescriptionError(
+            f"{where}: expected one free joint on {desc.trunk_body!r} and {n} hinges "
+            f"(nq {7 + n}), got nq {model.nq}"
+        )
+    mj_names = tuple(model.joint(j).name for j in range(model.njnt) if j != root_jnt)
+    if mj_names != desc.joint_names:
+        raise RobotDescriptionError(f"{where}: joint order differs: MJCF {list(mj_names)}")
+    hinge_ids = [model.joint(name).id for name in desc.joint_names]
+    if np.any(model.jnt_type[hinge_ids] != mujoco.mjtJoint.mjJNT_HINGE):
+        raise RobotDescriptionError(f"{where}: every actuated joint must be a hinge")
+    ranges = model.jnt_range[hinge_ids]
+    if not (
+        model.jnt_limited[hinge_ids].all()
+        and np.allclose(ranges[:, 0], desc.q_lower, atol=_ANGLE_TOL, rtol=0)
+        and np.allclose(ranges[:, 1], desc.q_upper, atol=_ANGLE_TOL, rtol=0)
+    ):
+        raise RobotDescriptionError(
+            f"{where}: joint ranges differ: MJCF {np.degrees(ranges).round(3).tolist()} deg"
+        )
+
+    if model.nu != n or [int(model.actuator_trnid[a, 0]) for a in range(n)] != hinge_ids:
+        raise RobotDescriptionError(f"{where}: need one actuator per joint, in joint order")
+    ctrl = model.actuator_ctrlrange
+    if not (
+        model.actuator_ctrllimited.all()
+        and np.allclose(model.actuator_gear[:, 0], 1.0)
+        and np.allclose(ctrl[:, 1], desc.torque_limits, atol=_LENGTH_TOL, rtol=0)
+        and np.allclose(ctrl[:, 0], -desc.torque_limits, atol=_LENGTH_TOL, rtol=0)
+    ):
+        raise RobotDescriptionError(f"{where}: actuator ctrlrange must be +-torque_Nm, gear 1")
+
+    for site in (desc.imu_site, *desc.foot_frames, *desc.hand_frames):
+        if not _has(model, mujoco.mjtObj.mjOBJ_SITE, site):
+            raise RobotDescriptionError(f"{where}: site {site!r} missing")
+
+    if not _has(model, mujoco.mjtObj.mjOBJ_KEY, desc.nominal_keyframe):
+        raise RobotDescriptionError(f"{where}: keyframe {desc.nominal_keyframe!r} missing")
+    key_qpos = model.key(desc.nominal_keyframe).qpos
+    qadr = model.jnt_qposadr[hinge_ids]
+    if not (
+        np.allclose(key_qpos[qadr], desc.q_joints_nominal, atol=_ANGLE_TOL, rtol=0)
+        and abs(key_qpos[model.jnt_qposadr[root_jnt] + 2] - desc.base_height_nominal) < _LENGTH_TOL
+    ):
+        raise RobotDescriptionError(
+            f"{where}: keyframe {desc.nominal_keyframe!r} differs from nominal: "
+            f"{np.degrees(key_qpos[qadr]).round(6).tolist()} deg"
+        )
+    return float(np.sum(model.body_mass))
+
+
+def _has(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str) -> bool:
+    return bool(mujoco.mj_name2id(model, kind, name) >= 0)
+
+
+def _frozen(values: Any) -> NDArray[np.float64]:
+    array = np.array(values, dtype=np.float64)
+    array.flags.writeable = False
+    return array
+
+
+def _indices(
+    reader: _Reader, key: str, side: str, joint_names: tuple[str, ...]
+) -> NDArray[np.intp]:
+    names = reader.get_sub(key).get_list(side)
+    unknown = [n for n in names if n not in joint_names]
+    if unknown:
+        raise reader.error(f"{key}.{side}: unknown joints {unknown}")
+    idx = np.array([joint_names.index(n) for n in names], dtype=np.intp)
+    idx.flags.writeable = False
+    return idx
+
+
+class _Reader:
+    """Typed access to one YAML mapping, raising `RobotDescriptionError` with the key path."""
+
+    def __init__(self, path: Path, node: Any, where: str = "") -> None:
+        self.path, self.where = path, where
+        if not isinstance(node, dict):
+            raise self.error(f"expected a mapping, got {type(node).__name__}")
+        self.node: dict[str, Any] = node
+
+    def error(self, message: str) -> RobotDescriptionError:
+        prefix = f"{self.where}: " if self.where else ""
+        return RobotDescriptionError(f"{self.path}: {prefix}{message}")
+
+    def keys(self) -> list[str]:
+        return [str(k) for k in self.node]
+
+    def _get(self, key: str) -> Any:
+        if key not in self.node:
+            raise self.error(f"missing key {key!r}")
+        return self.node[key]
+
+    def _key(self, key: str) -> str:
+        return f"{self.where}.{key}" if self.where else key
+
+    def get_sub(self, key: str) -> _Reader:
+        return _Reader(self.path, self._get(key), self._key(key))
+
+    def get_list(self, key: str) -> list[Any]:
+        value = self._get(key)
+        if not isinstance(value, list) or not value:
+            raise self.error(f"{key!r} must be a non-empty list")
+        return value
+
+    def get_str(self, key: str) -> str:
+        value = self._get(key)
+        if not isinstance(value, str) or not value:
+            raise self.error(f"{key!r} must be a non-empty string, got {value!r}")
+        return value
+
+    def get_float(self, key: str) -> float:
+        value = self._get(key)
+        if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value):
+            raise self.error(f"{key!r} must be a finite number, got {value!r}")
+        return float(value)
+
+    def get_positive(self, key: str) -> float:
+        value = self.get_float(key)
+        if value <= 0.0:
+            raise self.error(f"{key!r} must be positive, got {value!r}")
+        return value
+
+    def get_pair(self, key: str) -> tuple[float, float]:
+        value = self._get(key)
+        ok = isinstance(value, list) and len(value) == 2
+        if not ok or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+            raise self.error(f"{key!r} must be a list of two numbers, got {value!r}")
+        return float(value[0]), float(value[1])

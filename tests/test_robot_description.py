@@ -1,0 +1,174 @@
+"""robot.yaml + MJCF loading: values, lookup rules, and the errors bad files raise."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+import pytest
+from ruamel.yaml import YAML
+
+from locoplan.exceptions import RobotDescriptionError
+from locoplan.robot.description import (
+    ROBOTS_DIR_ENV,
+    RobotDescription,
+    load_robot_description,
+    robots_dir,
+)
+
+JOINTS = (
+    "L_hip_yaw",
+    "L_hip_roll",
+    "L_hip_pitch",
+    "L_knee",
+    "L_ankle",
+    "R_hip_yaw",
+    "R_hip_roll",
+    "R_hip_pitch",
+    "R_knee",
+    "R_ankle",
+    "L_shoulder_roll",
+    "L_shoulder_pitch",
+    "L_elbow",
+    "R_shoulder_roll",
+    "R_shoulder_pitch",
+    "R_elbow",
+)
+HECTOR_DIR = robots_dir() / "hector"
+
+
+@pytest.fixture(scope="module")
+def desc() -> RobotDescription:
+    return load_robot_description()
+
+
+def test_values(desc: RobotDescription) -> None:
+    assert desc.name == "hector"
+    assert desc.mjcf_path == (HECTOR_DIR / "hector.xml").resolve()
+    assert desc.joint_names == JOINTS
+    assert desc.n_joints == 16
+    assert desc.foot_frames == ("L_sole", "R_sole")
+    assert desc.hand_frames == ("L_hand", "R_hand")
+    assert desc.base_frame == desc.trunk_body == "trunk"
+    assert (desc.foot_toe, desc.foot_heel) == (0.09, 0.06)
+    assert desc.fall_height == 0.35
+    assert desc.base_height_nominal == 0.60
+    # 1e-9 kg: a sum of decimal masses.
+    assert abs(desc.total_mass - 17.0) < 1e-9
+    knee = JOINTS.index("L_knee")
+    assert desc.torque_limits[knee] == 67.0 and desc.velocity_limits[knee] == 10.5
+    # Exact radians of the YAML's degrees (np.radians of the same decimal).
+    assert desc.q_lower[knee] == np.radians(15.0) and desc.q_upper[knee] == np.radians(160.0)
+    # Shoulder roll: left [-30, 90], right [-90, 30] deg (round trip through radians: 1e-12).
+    assert np.allclose(np.degrees(desc.q_lower[[10, 13]]), [-30.0, -90.0], atol=1e-12, rtol=0)
+    assert np.allclose(np.degrees(desc.q_upper[[10, 13]]), [90.0, 30.0], atol=1e-12, rtol=0)
+    assert [list(i) for i in desc.leg_joint_indices] == [[0, 1, 2, 3, 4], [5, 6, 7, 8, 9]]
+    assert [list(i) for i in desc.arm_joint_indices] == [[10, 11, 12], [13, 14, 15]]
+    # Flat feet in the nominal pose: ankle = -(hip_pitch + knee), to the YAML's 1e-6 deg.
+    hp, kn, an = np.degrees(desc.q_joints_nominal[2:5])
+    assert abs(an + hp + kn) < 1e-9
+
+
+def test_arrays_are_read_only(desc: RobotDescription) -> None:
+    with pytest.raises(ValueError):
+        desc.torque_limits[0] = 1.0
+    with pytest.raises(ValueError):
+        desc.leg_joint_indices[0][0] = 3
+    with pytest.raises(AttributeError):
+        desc.name = "other"  # type: ignore[misc]
+
+
+def test_joint_order_agrees_everywhere(desc: RobotDescription) -> None:
+    m = mujoco.MjModel.from_xml_path(str(desc.mjcf_path))
+    assert tuple(m.joint(j).name for j in range(1, m.njnt)) == JOINTS
+    assert tuple(m.actuator(a).name for a in range(m.nu)) == JOINTS
+    assert [int(m.actuator_trnid[a, 0]) for a in range(m.nu)] == list(range(1, 17))
+    pm = pin.buildModelFromMJCF(str(desc.mjcf_path))
+    assert tuple(pm.names)[2:] == JOINTS
+    yaml_joints = YAML(typ="safe").load((HECTOR_DIR / "robot.yaml").read_text())["joints"]
+    assert tuple(j["name"] for j in yaml_joints) == JOINTS
+
+
+def test_lookup_by_path_dir_and_env(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    by_file = load_robot_description(str(HECTOR_DIR / "robot.yaml"))
+    by_dir = load_robot_description(str(HECTOR_DIR))
+    assert by_file.mjcf_path == by_dir.mjcf_path
+    robot_dir = tmp_path / "robots" / "mybot"
+    robot_dir.mkdir(parents=True)
+    _write(robot_dir, _raw())
+    monkeypatch.setenv(ROBOTS_DIR_ENV, str(tmp_path / "robots"))
+    assert load_robot_description("mybot").name == "hector"
+    with pytest.raises(RobotDescriptionError, match="no robot description"):
+        load_robot_description("hector")
+
+
+def _raw() -> dict:
+    raw = YAML(typ="safe").load((HECTOR_DIR / "robot.yaml").read_text())
+    raw["mjcf"] = str((HECTOR_DIR / "hector.xml").resolve())
+    return dict(raw)
+
+
+def _write(directory: Path, raw: dict) -> Path:
+    path = directory / "robot.yaml"
+    yaml = YAML(typ="safe")
+    with path.open("w") as f:
+        yaml.dump(raw, f)
+    return path
+
+
+def _swap_first_joints(raw: dict) -> None:
+    raw["joints"][0], raw["joints"][1] = raw["joints"][1], raw["joints"][0]
+
+
+def _set(path: list, value: object):
+    def edit(raw: dict) -> None:
+        node = raw
+        for key in path[:-1]:
+            node = node[key]
+        node[path[-1]] = value
+
+    return edit
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (_set(["fall_height"], -1.0), "'fall_height' must be positive"),
+        (_set(["fall_height"], 0.7), "fall_height must be below"),
+        (_set(["foot"], None), "foot: expected a mapping"),
+        (_set(["joints", 0, "torque_Nm"], "lots"), r"joints\[0\]: 'torque_Nm' must be a finite"),
+        (_set(["joints", 3, "range_deg"], [160, 15]), "lower 160.0 must be below"),
+        (_set(["joints", 3, "range_deg"], [10, 160]), "joint ranges differ"),
+        (_set(["joints", 3, "torque_Nm"], 33.5), "ctrlrange"),
+        (_swap_first_joints, "joint order differs"),
+        (_set(["legs", "L"], ["L_hip_yaw", "L_toe"]), r"legs.L: unknown joints \['L_toe'\]"),
+        (_set(["contacts", "hands", "L"], "L_palm"), "site 'L_palm' missing"),
+        (_set(["nominal", "joints_deg", "L_knee"], 69.0), "keyframe 'stand' differs"),
+        (_set(["nominal", "joints_deg", "L_knee"], 5.0), "within the joint ranges"),
+        (_set(["nominal_keyframe"], "crouch"), "keyframe 'crouch' missing"),
+        (_set(["mjcf"], "nowhere.xml"), "MJCF file .* not found"),
+        (_set(["trunk_body"], "pelvis"), "trunk body 'pelvis' missing"),
+    ],
+)
+def test_bad_files_raise(tmp_path: Path, edit, message: str) -> None:
+    raw = _raw()
+    edit(raw)
+    path = _write(tmp_path, raw)
+    with pytest.raises(RobotDescriptionError, match=message) as info:
+        load_robot_description(str(path))
+    assert str(path) in str(info.value) or "hector.xml" in str(info.value)
+
+
+def test_unreadable_yaml_and_missing_key(tmp_path: Path) -> None:
+    path = tmp_path / "robot.yaml"
+    path.write_text("name: [unclosed\n")
+    with pytest.raises(RobotDescriptionError, match="cannot read YAML"):
+        load_robot_description(str(path))
+    raw = _raw()
+    del raw["contacts"]
+    with pytest.raises(RobotDescriptionError, match="missing key 'contacts'"):
+        load_robot_description(str(_write(tmp_path, raw)))
+    with pytest.raises(RobotDescriptionError, match="no robot description"):
+        load_robot_description(str(tmp_path / "absent.yaml"))
