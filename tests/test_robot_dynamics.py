@@ -250,3 +250,38 @@ def test_nominal_pose(desc: RobotDescription, robot: PinocchioRobot, mj: tuple) 
         assert 0.25 <= p[0] <= 0.30
         assert abs(p[1] - side * 0.12) < 1e-9
         assert abs(p[2] + 0.05) < 0.01
+
+
+@pytest.mark.parametrize(
+    ("joint", "angle", "frame", "direction"),
+    [
+        ("L_elbow", 0.3, "L_hand", (1, 0, 1)),  # flexion: hand forward and up
+        ("R_elbow", 0.3, "R_hand", (1, 0, 1)),
+        ("L_shoulder_pitch", -0.3, "L_hand", (1, 0, 1)),  # negative lifts the arm forward
+        ("L_shoulder_roll", 0.3, "L_hand", (0, 1, 1)),  # left arm outward (+y)
+        ("R_shoulder_roll", 0.3, "R_hand", (0, 1, 1)),  # right arm inward (+y)
+        ("R_shoulder_roll", -0.3, "R_hand", (0, -1, 1)),  # right arm outward
+        ("L_knee", 0.3, "L_sole", (-1, 0, 1)),  # flexion: foot backward and up
+        ("R_hip_pitch", 0.3, "R_sole", (-1, 0, 1)),  # positive swings the leg back
+        ("L_hip_roll", 0.3, "L_sole", (0, 1, 1)),  # about +x: foot toward +y
+    ],
+)
+def test_sign_conventions(
+    desc: RobotDescription, joint: str, angle: float, frame: str, direction: tuple
+) -> None:
+    """Joint signs as documented, from the straight pose (all joints 0, trunk at the origin).
+
+    This also checks that pinocchio reads the elbow's (0, -1, 0) axis with its sign.
+    """
+    robot = PinocchioRobot(desc)
+    q = pin.neutral(robot.model)
+    robot.update(q, np.zeros(robot.nv))
+    p0 = robot.frame_position(frame)
+    q[7 + desc.joint_names.index(joint)] = angle
+    robot.update(q, np.zeros(robot.nv))
+    dp = robot.frame_position(frame) - p0
+    for axis, sign in enumerate(direction):
+        if sign == 0:
+            assert abs(dp[axis]) < 1e-12  # a planar motion: round-off only
+        else:
+            assert np.sign(dp[axis]) == sign and abs(dp[axis]) > 1e-3

@@ -79,7 +79,7 @@ def robots_dir() -> Path:
     return Path(locoplan.__file__).resolve().parents[1] / "robots"
 
 
-def resolve_robot_yaml(name_or_path: str) -> Path:
+def resolve_robot_yaml(name_or_path: str | Path) -> Path:
     """Path of the robot.yaml for a robot name, a robot directory or a robot.yaml path."""
     candidate = Path(name_or_path)
     if candidate.suffix in (".yaml", ".yml"):
@@ -87,7 +87,7 @@ def resolve_robot_yaml(name_or_path: str) -> Path:
     elif candidate.is_dir():
         path = candidate / "robot.yaml"
     else:
-        path = robots_dir() / name_or_path / "robot.yaml"
+        path = robots_dir() / str(name_or_path) / "robot.yaml"
     if not path.is_file():
         raise RobotDescriptionError(
             f"robot {name_or_path!r}: no robot description at {path} "
@@ -96,7 +96,7 @@ def resolve_robot_yaml(name_or_path: str) -> Path:
     return path
 
 
-def load_robot_description(name_or_path: str = "hector") -> RobotDescription:
+def load_robot_description(name_or_path: str | Path = "hector") -> RobotDescription:
     """Load and cross-check a robot description.
 
     `name_or_path` is a robot name (looked up as `<robots_dir()>/<name>/robot.yaml`), a

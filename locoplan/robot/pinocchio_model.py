@@ -53,6 +53,10 @@ class PinocchioRobot:
                 f"{desc.mjcf_path}: pinocchio joint order {list(model.names)[2:]} "
                 f"differs from robot.yaml {list(desc.joint_names)}"
             )
+        # The MJCF parser leaves these at +inf (MJCF has no velocity limits, and the parser
+        # does not read actuator ctrlrange); keep the pinocchio model self-consistent.
+        model.effortLimit[6:] = desc.torque_limits
+        model.velocityLimit[6:] = desc.velocity_limits
         self.desc = desc
         self.model = model
         self.data = model.createData()
