@@ -34,7 +34,7 @@ from foxglove import messages as fm
 
 from locoplan import __version__
 from locoplan.log import topics
-from locoplan.log.jsonenc import encode_json, infer_schema, to_jsonable
+from locoplan.log.jsonenc import infer_schema, make_json_encoder, to_jsonable
 from locoplan.log.scene import SceneItem, to_scene_entity
 from locoplan.log.transform import Transform
 
@@ -60,6 +60,8 @@ class RunLogWriter:
     replaced unless `overwrite` is False (then FileExistsError). `metadata` adds string
     key/values to the ``locoplan`` metadata record (keys may not shadow the reserved ones).
     `flush_interval_s` (> 0, wall-clock seconds) bounds what a SIGKILL can lose.
+    `json_decimals` rounds float numpy arrays in JSON payloads to that many decimal places
+    (None: full precision; 6 halves the cost and size of float-heavy payloads).
     """
 
     def __init__(
@@ -70,6 +72,7 @@ class RunLogWriter:
         scenario_text: str,
         metadata: Mapping[str, str] | None = None,
         flush_interval_s: float = 1.0,
+        json_decimals: int | None = None,
         overwrite: bool = True,
     ) -> None:
         if not flush_interval_s > 0.0:
@@ -90,6 +93,7 @@ class RunLogWriter:
         )
         self._closed = False
         self._flush_interval_s = float(flush_interval_s)
+        self._encode_json = make_json_encoder(json_decimals)
         self._flush_due = time.monotonic() + self._flush_interval_s
         self._last_ns = 0
         self._message_count = 0
@@ -158,8 +162,9 @@ class RunLogWriter:
         """Log link poses at simulation time `t` (s) on ``/tf`` as foxglove.FrameTransforms."""
         ns = self._log_time(t, topics.TF, "tf")
         stamp = _timestamp(ns)
-        msg = fm.FrameTransforms(
-            transforms=[
+        self._log_tf(
+            ns,
+            [
                 fm.FrameTransform(
                     timestamp=stamp,
                     parent_frame_id=tr.parent_frame,
@@ -172,11 +177,55 @@ class RunLogWriter:
                     ),
                 )
                 for tr in transforms
-            ]
+            ],
         )
+
+    def frame_transforms_arrays(
+        self,
+        t: float,
+        parent_frames: str | Sequence[str],
+        child_frames: Sequence[str],
+        translations: FloatArray,
+        rotations_xyzw: FloatArray,
+    ) -> None:
+        """`frame_transforms` from arrays, without building `Transform` values (about twice
+        as fast for 20 links).
+
+        Row i is the pose of `child_frames[i]` in `parent_frames[i]` (or in `parent_frames`
+        when it is one string): `translations` (n, 3) in m, `rotations_xyzw` (n, 4) unit
+        quaternions (x, y, z, w). From MuJoCo: ``d.xpos[ids]``, ``d.xquat[ids][:, [1, 2, 3, 0]]``.
+        """
+        n = len(child_frames)
+        parents = [parent_frames] * n if isinstance(parent_frames, str) else parent_frames
+        p = np.asarray(translations, dtype=float)
+        r = np.asarray(rotations_xyzw, dtype=float)
+        if p.shape != (n, 3) or r.shape != (n, 4) or len(parents) != n:
+            raise ValueError(
+                f"{n} child frames need {n} parents, translations (n, 3) and rotations (n, 4);"
+                f" got {len(parents)}, {p.shape}, {r.shape}"
+            )
+        ns = self._log_time(t, topics.TF, "tf")
+        stamp = _timestamp(ns)
+        self._log_tf(
+            ns,
+            [
+                fm.FrameTransform(
+                    timestamp=stamp,
+                    parent_frame_id=parent,
+                    child_frame_id=child,
+                    translation=fm.Vector3(x=x, y=y, z=z),
+                    rotation=fm.Quaternion(x=qx, y=qy, z=qz, w=qw),
+                )
+                for parent, child, (x, y, z), (qx, qy, qz, qw) in zip(
+                    parents, child_frames, p.tolist(), r.tolist(), strict=True
+                )
+            ],
+        )
+
+    def _log_tf(self, ns: int, transforms: list[fm.FrameTransform]) -> None:
         if self._tf_channel is None:
             self._tf_channel = fc.FrameTransformsChannel(topics.TF, context=self._context)
-        self._tf_channel.log(msg, log_time=ns)
+        self._tf_channel.log(fm.FrameTransforms(transforms=transforms), log_time=ns)
         self._wrote()
 
     def joint_states(
@@ -262,7 +311,7 @@ class RunLogWriter:
         if channel is None:
             schema = infer_schema(payload, "locoplan" + topic.replace("/", "."))
             channel = self._new_json_channel(topic, schema)
-        channel.base.log(encode_json(payload), ns)
+        channel.base.log(self._encode_json(payload), ns)
         self._wrote()
 
     def event(self, t: float, kind: str, **fields: Any) -> None:
@@ -274,7 +323,7 @@ class RunLogWriter:
         channel = self._json_channels.get(topics.EVENTS)
         if channel is None:
             channel = self._new_json_channel(topics.EVENTS, _EVENT_SCHEMA)
-        channel.base.log(encode_json({"kind": kind, **fields}), ns)
+        channel.base.log(self._encode_json({"kind": kind, **fields}), ns)
         self._wrote()
 
     # -- end of run --------------------------------------------------------------------
