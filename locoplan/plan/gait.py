@@ -1,0 +1,206 @@
+"""Foot contact schedule: stance/swing per foot from the locomotion tasks (sigma_C1, sigma_C2).
+
+During every locomotion task (step, walk, turn) the feet alternate with the scenario's gait:
+n = max(1, round(duration / period)) whole cycles fit the task exactly (period' = duration / n),
+the swing time is kept but capped at period' / 2 - GAIT_MIN_DOUBLE_SUPPORT. In each cycle
+starting at c the LEFT foot swings on [c, c + swing), the RIGHT foot on
+[c + period'/2, c + period'/2 + swing). Outside locomotion both feet stand. Swing intervals are
+half-open: at the touchdown instant the foot is in stance again.
+"""
+
+from __future__ import annotations
+
+import bisect
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from locoplan.plan.constants import GAIT_MIN_DOUBLE_SUPPORT
+from locoplan.plan.errors import PlanError
+from locoplan.plan.tasks import PlannedTask
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+FOOT_NAMES: tuple[str, str] = ("L", "R")
+
+
+def side_index(side: int | str) -> int:
+    """0 for the left foot/hand ("L", "left", 0), 1 for the right ("R", "right", 1)."""
+    if side in (0, "L", "l", "left"):
+        return 0
+    if side in (1, "R", "r", "right"):
+        return 1
+    raise ValueError(f"unknown side {side!r}: use 'L'/'R' (or 0/1)")
+
+
+@dataclass(frozen=True, slots=True)
+class SwingPhase:
+    """A foot's current swing: lift-off and touchdown times (s) and `phase` in [0, 1]."""
+
+    liftoff: float
+    touchdown: float
+    phase: float
+
+    @property
+    def duration(self) -> float:
+        """Swing duration (s)."""
+        return self.touchdown - self.liftoff
+
+
+@dataclass(frozen=True, slots=True)
+class GaitBlock:
+    """The gait used in one locomotion task: `cycles` cycles of `period` s with `swing` s swings."""
+
+    task_index: int
+    start: float
+    end: float
+    cycles: int
+    period: float
+    swing: float
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ContactSchedule:
+    """Swing intervals per foot (sorted, non-overlapping) and their evaluation.
+
+    `swing_start[f]`, `swing_end[f]`: arrays (k_f,) of lift-off and touchdown times (s) of foot f
+    (0 = left, 1 = right); `swing_task[f]`: the locomotion task index of each swing.
+    """
+
+    blocks: tuple[GaitBlock, ...]
+    swing_start: tuple[FloatArray, FloatArray]
+    swing_end: tuple[FloatArray, FloatArray]
+    swing_task: tuple[tuple[int, ...], tuple[int, ...]]
+    _starts_list: tuple[list[float], list[float]]
+
+    def swing_intervals(self, foot: int | str) -> tuple[tuple[float, float], ...]:
+        """Swing intervals [lift-off, touchdown) of the foot, sorted (s)."""
+        f = side_index(foot)
+        return tuple(zip(self.swing_start[f].tolist(), self.swing_end[f].tolist(), strict=True))
+
+    def stance_intervals(self, foot: int | str, t_end: float) -> tuple[tuple[float, float], ...]:
+        """Stance intervals of the foot over [0, t_end], the complement of its swings (s)."""
+        out: list[tuple[float, float]] = []
+        t = 0.0
+        for a, b in self.swing_intervals(foot):
+            if a > t:
+                out.append((t, a))
+            t = b
+        if t < t_end:
+            out.append((t, t_end))
+        return tuple(out)
+
+    def _swing_index(self, f: int, t: float) -> int:
+        """Index of the swing of foot f containing t, or -1."""
+        i = bisect.bisect_right(self._starts_list[f], t) - 1
+        if i >= 0 and t < self.swing_end[f][i]:
+            return i
+        return -1
+
+    def in_stance(self, foot: int | str, t: float | FloatArray) -> bool | BoolArray:
+        """Whether the foot is in stance at time t (scalar) or at each time of an array."""
+        f = side_index(foot)
+        if np.ndim(t) == 0:
+            return self._swing_index(f, float(t)) < 0
+        times = np.asarray(t, dtype=float)
+        return ~self._swinging(f, times)
+
+    def _swinging(self, f: int, times: FloatArray) -> BoolArray:
+        starts = self.swing_start[f]
+        if starts.size == 0:
+            return np.zeros(times.shape, dtype=bool)
+        i = np.searchsorted(starts, times, side="right") - 1
+        ok = i >= 0
+        return ok & (times < self.swing_end[f][np.maximum(i, 0)])
+
+    def flags(self, times: FloatArray) -> BoolArray:
+        """Stance flags (n, 2) bool: column 0 left foot, column 1 right (sigma_C1, sigma_C2)."""
+        times = np.asarray(times, dtype=float)
+        out = np.empty((times.shape[0], 2), dtype=bool)
+        out[:, 0] = ~self._swinging(0, times)
+        out[:, 1] = ~self._swinging(1, times)
+        return out
+
+    def swing_phase(self, foot: int | str, t: float) -> SwingPhase | None:
+        """The foot's swing at time t, or None when it is in stance."""
+        f = side_index(foot)
+        i = self._swing_index(f, t)
+        if i < 0:
+            return None
+        a = float(self.swing_start[f][i])
+        b = float(self.swing_end[f][i])
+        return SwingPhase(a, b, (t - a) / (b - a))
+
+    def next_touchdown(self, foot: int | str, t: float) -> float | None:
+        """Touchdown time of the swing in progress at t, else of the next swing, else None."""
+        f = side_index(foot)
+        i = self._swing_index(f, t)
+        if i >= 0:
+            return float(self.swing_end[f][i])
+        j = bisect.bisect_right(self._starts_list[f], t)
+        if j < len(self._starts_list[f]):
+            return float(self.swing_end[f][j])
+        return None
+
+    def next_liftoff(self, foot: int | str, t: float) -> float | None:
+        """First lift-off time strictly after t, or None."""
+        f = side_index(foot)
+        j = bisect.bisect_right(self._starts_list[f], t)
+        if j < len(self._starts_list[f]):
+            return self._starts_list[f][j]
+        return None
+
+
+def gait_block(task: PlannedTask, period: float, swing: float) -> GaitBlock:
+    """Fit whole gait cycles into a locomotion task (see the module docstring)."""
+    duration = task.end - task.start
+    n = max(1, round(duration / period))
+    p = duration / n
+    s = min(swing, p / 2.0 - GAIT_MIN_DOUBLE_SUPPORT)
+    if s <= 0.0:
+        raise PlanError(
+            f"{task.action} lasts {duration:g} s: too short for one gait cycle with "
+            f"{GAIT_MIN_DOUBLE_SUPPORT:g} s of double support after each swing",
+            task.index,
+        )
+    return GaitBlock(task.index, task.start, task.end, n, p, s)
+
+
+def build_contact_schedule(
+    tasks: tuple[PlannedTask, ...], period: float, swing: float
+) -> ContactSchedule:
+    """Contact schedule of the feet for the (sorted) planned tasks."""
+    blocks: list[GaitBlock] = []
+    starts: tuple[list[float], list[float]] = ([], [])
+    ends: tuple[list[float], list[float]] = ([], [])
+    owners: tuple[list[int], list[int]] = ([], [])
+    last_end = -np.inf
+    last_index = -1
+    for task in tasks:
+        if task.kind != "locomotion":
+            continue
+        if task.start < last_end - 1e-9:
+            raise PlanError(
+                f"{task.action} at {task.start:g} s overlaps the locomotion task {last_index} "
+                f"(until {last_end:g} s): two locomotion tasks cannot run at once",
+                task.index,
+            )
+        block = gait_block(task, period, swing)
+        blocks.append(block)
+        for k in range(block.cycles):
+            c = block.start + k * block.period
+            for f, offset in ((0, 0.0), (1, block.period / 2.0)):
+                starts[f].append(c + offset)
+                ends[f].append(c + offset + block.swing)
+                owners[f].append(task.index)
+        last_end = task.end
+        last_index = task.index
+    return ContactSchedule(
+        blocks=tuple(blocks),
+        swing_start=(np.asarray(starts[0], dtype=float), np.asarray(starts[1], dtype=float)),
+        swing_end=(np.asarray(ends[0], dtype=float), np.asarray(ends[1], dtype=float)),
+        swing_task=(tuple(owners[0]), tuple(owners[1])),
+        _starts_list=(list(starts[0]), list(starts[1])),
+    )

@@ -1,0 +1,241 @@
+"""The compiled plan: what the controller evaluates every tick and at every MPC sample.
+
+All times in s from the simulation start, world frame, SI units, radians. Feet and hands are
+named "L"/"R" (or 0/1). Vectorised methods take an array of times (n,) and cost a few
+`searchsorted` calls; scalar methods (`*_at`, `swing_phase`, ...) use `bisect` on plain lists.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+
+from locoplan.plan.events import PlanEvent
+from locoplan.plan.export import plan_to_dict
+from locoplan.plan.footholds import Footholds
+from locoplan.plan.gait import ContactSchedule, SwingPhase, side_index
+from locoplan.plan.hands import BasePose
+from locoplan.plan.manipulation import HAND_NAMES, ManipulationPlan, ObjectHold, ObjectTarget
+from locoplan.plan.tasks import PlannedTask
+from locoplan.plan.trunk import TrunkPath, TrunkReference, TrunkState
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+
+class HandTargets(NamedTuple):
+    """Hand targets at one instant, world frame: positions (3,) m and velocities (3,) m/s."""
+
+    p_L_world: FloatArray
+    p_R_world: FloatArray
+    v_L_world: FloatArray
+    v_R_world: FloatArray
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ObjectReference:
+    """Planned object load at n times: `held` (n,) bool (sigma_e), `mass` (n,) kg held in total,
+    `position` (n, 3) m world: the held object's planned centre (along the planned trunk
+    reference), or the planned trunk position where nothing is held (so r_e = 0 there)."""
+
+    held: BoolArray
+    mass: FloatArray
+    position: FloatArray
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Plan:
+    """A compiled scenario. Build it with `locoplan.plan.compile_plan`.
+
+    `tasks`: sorted by planned start; `t_end`: simulation end (s); `end_shift`: how much
+    quasi-static re-timing moved the end (s, 0 for dynamic); `gait_period`, `gait_swing`: the
+    scenario's nominal gait (each locomotion task's own fit is in `contacts.blocks`).
+    """
+
+    scenario_name: str
+    strategy: str
+    tasks: tuple[PlannedTask, ...]
+    t_end: float
+    end_shift: float
+    base_height: float
+    foot_width: float
+    gait_period: float
+    gait_swing: float
+    contacts: ContactSchedule
+    footholds: Footholds
+    trunk: TrunkPath
+    manipulation: ManipulationPlan
+    events: tuple[PlanEvent, ...]
+
+    # --- feet (sigma_C1, sigma_C2) ---------------------------------------------------------
+    def foot_stance(self, foot: int | str, t: float | FloatArray) -> bool | BoolArray:
+        """Whether the foot is in stance at t (scalar -> bool, array (n,) -> (n,) bool)."""
+        return self.contacts.in_stance(foot, t)
+
+    def contact_flags(self, times: FloatArray) -> BoolArray:
+        """Foot stance flags (n, 2) bool at `times` (n,): columns left, right."""
+        return self.contacts.flags(times)
+
+    def swing_phase(self, foot: int | str, t: float) -> SwingPhase | None:
+        """The foot's swing in progress at t (lift-off, touchdown, phase), or None in stance."""
+        return self.contacts.swing_phase(foot, t)
+
+    def next_touchdown(self, foot: int | str, t: float) -> float | None:
+        """Touchdown time of the current swing, else of the next one, else None (s)."""
+        return self.contacts.next_touchdown(foot, t)
+
+    def next_liftoff(self, foot: int | str, t: float) -> float | None:
+        """First lift-off strictly after t, or None (s)."""
+        return self.contacts.next_liftoff(foot, t)
+
+    def stance_intervals(self, foot: int | str) -> tuple[tuple[float, float], ...]:
+        """Stance intervals of the foot over [0, t_end] (s)."""
+        return self.contacts.stance_intervals(foot, self.t_end)
+
+    def swing_intervals(self, foot: int | str) -> tuple[tuple[float, float], ...]:
+        """Swing intervals [lift-off, touchdown) of the foot (s)."""
+        return self.contacts.swing_intervals(foot)
+
+    def footholds_at(self, times: FloatArray) -> FloatArray:
+        """Nominal footholds (n, 2, 3) m world: the stance position, or the planned touchdown
+        point during a swing."""
+        return self.footholds.at(times)
+
+    def foothold_at(self, foot: int | str, t: float) -> FloatArray:
+        """Nominal foothold (3,) of one foot at t (m, world)."""
+        return self.footholds.foothold_at(foot, t)
+
+    # --- trunk -----------------------------------------------------------------------------
+    def trunk_reference(self, times: FloatArray) -> TrunkReference:
+        """Trunk reference at `times` (n,)."""
+        return self.trunk.evaluate(times)
+
+    def trunk_reference_at(self, t: float) -> TrunkState:
+        """Trunk reference at one time (scalar fast path)."""
+        return self.trunk.state_at(t)
+
+    @property
+    def final_pose(self) -> tuple[float, float, float]:
+        """Trunk (x, y, yaw) after every locomotion task (m, rad)."""
+        return self.trunk.end_pose()
+
+    # --- hands (sigma_H1, sigma_H2) --------------------------------------------------------
+    def hand_targets_at(
+        self,
+        t: float,
+        base_position: FloatArray,
+        base_yaw: float,
+        base_velocity: FloatArray | None = None,
+        base_yaw_rate: float | None = None,
+    ) -> HandTargets:
+        """Hand targets at t for the given trunk pose (origin (3,) m and yaw rad, world).
+
+        Targets in the trunk frame follow this pose; targets in the world stay put. Velocities
+        add the trunk's motion: `base_velocity` (3,) m/s and `base_yaw_rate` rad/s, by default
+        the planned ones at t.
+        """
+        if base_velocity is None or base_yaw_rate is None:
+            _, _, _, pvx, pvy, pwz = self.trunk.pose_at(t)
+            vx, vy, vz = (pvx, pvy, 0.0) if base_velocity is None else _xyz(base_velocity)
+            wz = pwz if base_yaw_rate is None else float(base_yaw_rate)
+        else:
+            vx, vy, vz = _xyz(base_velocity)
+            wz = float(base_yaw_rate)
+        bx, by, bz = _xyz(base_position)
+        b = BasePose(bx, by, bz, math.cos(base_yaw), math.sin(base_yaw), vx, vy, vz, wz)
+        pl, vl = self.manipulation.tracks[0].evaluate(t, b)
+        pr, vr = self.manipulation.tracks[1].evaluate(t, b)
+        return HandTargets(np.array(pl), np.array(pr), np.array(vl), np.array(vr))
+
+    def hand_active(self, hand: int | str, t: float) -> bool:
+        """Whether the hand follows a task target (during its manipulation tasks and while it
+        touches an object) rather than just holding the default pose."""
+        return self.manipulation.active_intervals[side_index(hand)].contains(t)
+
+    def hand_contact(self, hand: int | str, t: float) -> bool:
+        """Whether the hand is in contact with an object at t (sigma_H)."""
+        return self.manipulation.contact_intervals[side_index(hand)].contains(t)
+
+    def hand_contact_flags(self, times: FloatArray) -> BoolArray:
+        """Hand contact flags (n, 2) bool at `times` (n,): columns left, right (sigma_H1,
+        sigma_H2)."""
+        times = np.asarray(times, dtype=float)
+        out = np.empty((times.shape[0], 2), dtype=bool)
+        out[:, 0] = self.manipulation.contact_intervals[0].contains_array(times)
+        out[:, 1] = self.manipulation.contact_intervals[1].contains_array(times)
+        return out
+
+    def hand_contact_intervals(self, hand: int | str) -> tuple[tuple[float, float], ...]:
+        """Contact intervals [grasp, release) of the hand (s; release inf if never)."""
+        return self.manipulation.contact_intervals[side_index(hand)].as_tuples()
+
+    # --- objects (sigma_e) -----------------------------------------------------------------
+    @property
+    def holds(self) -> tuple[ObjectHold, ...]:
+        """Every pick .. release of an object, in pick order."""
+        return self.manipulation.holds
+
+    def object_held(self, times: FloatArray) -> BoolArray:
+        """Whether some object's weight is on the robot at each time (n,) -> (n,) bool."""
+        return self.manipulation.held_intervals.contains_array(times)
+
+    def held_object(self, t: float) -> str | None:
+        """Name of the object held at t (lift-off .. release), or None."""
+        for hold in self.manipulation.holds:
+            if hold.lift <= t < hold.release:
+                return hold.object
+        return None
+
+    def held_mass(self, times: FloatArray) -> FloatArray:
+        """Total mass held at each time (n,) kg; F_ext = -mass g along z."""
+        times = np.asarray(times, dtype=float)
+        out = np.zeros(times.shape[0])
+        for hold in self.manipulation.holds:
+            out += hold.mass * ((times >= hold.lift) & (times < hold.release))
+        return out
+
+    def object_target(self, name: str) -> ObjectTarget:
+        """Where the object should end up (KeyError for an undeclared name)."""
+        return self.manipulation.targets[name]
+
+    def object_reference(self, times: FloatArray) -> ObjectReference:
+        """Planned load at `times` (n,) for the MPC: flags, mass and object centre, evaluated
+        along the planned trunk reference. A one-hand hold puts the centre half the grip
+        width from the hand towards the trunk's centre line (an approximation)."""
+        times = np.asarray(times, dtype=float)
+        ref = self.trunk.evaluate(times)
+        position = ref.position.copy()
+        held = self.object_held(times)
+        for n in np.flatnonzero(held):
+            t = float(times[n])
+            hold = next(h for h in self.manipulation.holds if h.lift <= t < h.release)
+            yaw = float(ref.yaw[n])
+            px, py, pz = ref.position[n].tolist()
+            vx, vy, vz = ref.velocity[n].tolist()
+            b = BasePose(
+                px, py, pz, math.cos(yaw), math.sin(yaw), vx, vy, vz, float(ref.yaw_rate[n])
+            )
+            pts = [
+                np.array(self.manipulation.tracks[HAND_NAMES.index(h)].evaluate(t, b)[0])
+                for h in hold.hands
+            ]
+            if len(pts) == 2:
+                position[n] = 0.5 * (pts[0] + pts[1])
+            else:
+                side = 1.0 if hold.hands[0] == "L" else -1.0
+                y_axis = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+                position[n] = pts[0] - side * hold.half_width * y_axis
+        return ObjectReference(held, self.held_mass(times), position)
+
+    # --- export ----------------------------------------------------------------------------
+    def to_dict(self, reference_dt: float = 0.02) -> dict[str, Any]:
+        """JSON-ready description of the plan (see `locoplan.plan.export.plan_to_dict`)."""
+        return plan_to_dict(self, reference_dt)
+
+
+def _xyz(v: Any) -> tuple[float, float, float]:
+    return float(v[0]), float(v[1]), float(v[2])
