@@ -234,7 +234,7 @@ _KILL_CHILD = textwrap.dedent(
 
 
 def kill_trials(directory: Path, trials: int) -> None:
-    print(f"\nSIGKILL at a random moment 1.2-3 s into a run at ~real time, {trials} trials:")
+    print(f"\nSIGKILL at a random moment 1.5-3.3 s into a run at ~real time, {trials} trials:")
     losses = []
     for k in range(trials):
         path = directory / f"kill{k}.mcap"

@@ -32,7 +32,17 @@ _CHILD = textwrap.dedent(
 )
 
 
-def test_sigterm_closes_the_log(tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("sig", "returncode", "exception"),
+    [
+        (signal.SIGTERM, 128 + signal.SIGTERM, "SystemExit"),
+        # Ctrl-C: Python's own handler raises KeyboardInterrupt, then re-kills itself.
+        (signal.SIGINT, -signal.SIGINT, "KeyboardInterrupt"),
+    ],
+)
+def test_signal_closes_the_log(
+    tmp_path: Path, sig: signal.Signals, returncode: int, exception: str
+) -> None:
     path = tmp_path / "term.mcap"
     proc = subprocess.Popen(
         [sys.executable, "-c", _CHILD, str(path)],
@@ -43,8 +53,8 @@ def test_sigterm_closes_the_log(tmp_path: Path) -> None:
     assert proc.stdout is not None and proc.stderr is not None
     assert proc.stdout.readline().strip() == "ready", proc.stderr.read()
     time.sleep(0.3)
-    proc.send_signal(signal.SIGTERM)
-    assert proc.wait(timeout=10) == 128 + signal.SIGTERM
+    proc.send_signal(sig)
+    assert proc.wait(timeout=10) == returncode
     with open(path, "rb") as f:
         summary = make_reader(f).get_summary()  # footer and summary are present
     assert summary is not None
@@ -52,7 +62,7 @@ def test_sigterm_closes_the_log(tmp_path: Path) -> None:
     assert log.complete
     assert log.metadata["run_end"]["status"] == "aborted"
     (event,) = [m for _, m in log.messages("/events")]
-    assert event["kind"] == "aborted" and event["exception"] == "SystemExit"
+    assert event["kind"] == "aborted" and event["exception"] == exception
     assert log.topics["/tick"].message_count > 10
 
 

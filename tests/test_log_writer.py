@@ -335,3 +335,20 @@ def test_flush_interval_bounds_what_an_unclosed_file_holds(tmp_path: Path) -> No
     # Unflushed data is at most one interval old; 0.1 s more for a busy shared machine.
     assert copied_at - last < interval + 0.1
     w.close()
+
+
+def test_two_open_writers_do_not_mix(tmp_path: Path) -> None:
+    """Each writer has its own Foxglove context: a channel of one never reaches the other."""
+    with (
+        RunLogWriter(tmp_path / "a.mcap", scenario_name="a", scenario_text="") as a,
+        RunLogWriter(tmp_path / "b.mcap", scenario_name="b", scenario_text="") as b,
+    ):
+        for k in range(5):
+            a.json("/x", k * 0.1, {"who": "a"})
+            b.json("/x", k * 0.1, {"who": "b"})
+            b.joint_states(k * 0.1, JOINTS, np.zeros(4))
+    log_a, log_b = read_log(tmp_path / "a.mcap"), read_log(tmp_path / "b.mcap")
+    assert set(log_a.topics) == {"/x"}
+    assert {m["who"] for _, m in log_a.messages("/x")} == {"a"}
+    assert {m["who"] for _, m in log_b.messages("/x")} == {"b"}
+    assert log_b.topics["/joint_states"].message_count == 5

@@ -79,9 +79,9 @@ def make_json_encoder(decimals: int | None = None) -> Callable[[Mapping[str, Any
     """A function encoding one payload as compact strict JSON (UTF-8 bytes).
 
     With `decimals`, float numpy arrays are rounded to that many decimal places first (6 keeps
-    micrometres, micronewtons and microradians; it halves both the encoding time and the size
-    of float-heavy payloads, since Python spends most of its time printing 17 digits). Python
-    float scalars are written in full.
+    micrometres, micronewtons and microradians and, since Python spends most of the encoding
+    time printing 17 significant digits, saves about a quarter of the time and a fifth of the
+    size of float-heavy payloads). Python float scalars are written in full.
 
     The fast path lets the C encoder do the work; only when its output holds a NaN or Infinity
     token (or a string that merely contains one) is the payload converted by `to_jsonable`

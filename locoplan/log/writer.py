@@ -10,9 +10,11 @@ Layout of a file (topics in `locoplan.log.topics`):
   ``run_end`` (status, end wall time) when the file closes.
 
 Every message's log time is the simulation time in nanoseconds (t = 0 at the start of the
-run). The writer flushes the file at most every `flush_interval_s` of wall time, so a process
-killed with SIGKILL leaves a file that `locoplan.log.reader.read_log` reads up to about that
-long before the kill. Not thread-safe: one writer per thread.
+run). On the first write after `flush_interval_s` of wall time since the last flush, the
+writer finishes its chunk and hands it to the OS, so a process killed with SIGKILL leaves a
+file that `locoplan.log.reader.read_log` reads up to at most that long before the last write
+(measured: 0.5 s median, 0.95 s max over 8 kills at the 1 s default). A flush costs 0.2-1 ms
+and does not measurably grow the file. Not thread-safe: one writer per thread.
 """
 
 from __future__ import annotations
@@ -61,7 +63,8 @@ class RunLogWriter:
     key/values to the ``locoplan`` metadata record (keys may not shadow the reserved ones).
     `flush_interval_s` (> 0, wall-clock seconds) bounds what a SIGKILL can lose.
     `json_decimals` rounds float numpy arrays in JSON payloads to that many decimal places
-    (None: full precision; 6 halves the cost and size of float-heavy payloads).
+    (None: full precision; 6 keeps micrometres and micronewtons and saves about a quarter of
+    the encoding time and a fifth of the size of float-heavy payloads).
     """
 
     def __init__(
