@@ -144,6 +144,22 @@ class ContactSchedule:
             return float(self.swing_end[f][j])
         return None
 
+    def stance_start(self, foot: int | str, t: float) -> float | None:
+        """Touchdown time starting the stance that contains t; during a swing, that swing's
+        touchdown; None when no touchdown happened before t (the initial stance)."""
+        f = side_index(foot)
+        i = bisect.bisect_right(self._starts_list[f], t) - 1
+        if i < 0:
+            return None
+        return float(self.swing_end[f][i])
+
+    def block_at(self, t: float) -> GaitBlock | None:
+        """The gait block (locomotion task) whose [start, end) contains t, or None."""
+        for block in self.blocks:
+            if block.start <= t < block.end:
+                return block
+        return None
+
     def next_liftoff(self, foot: int | str, t: float) -> float | None:
         """First lift-off time strictly after t, or None."""
         f = side_index(foot)

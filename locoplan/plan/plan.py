@@ -35,6 +35,16 @@ class HandTargets(NamedTuple):
     v_L_world: FloatArray
     v_R_world: FloatArray
 
+    @property
+    def positions(self) -> FloatArray:
+        """Both positions stacked (2, 3): rows left, right."""
+        return np.stack((self.p_L_world, self.p_R_world))
+
+    @property
+    def velocities(self) -> FloatArray:
+        """Both velocities stacked (2, 3): rows left, right."""
+        return np.stack((self.v_L_world, self.v_R_world))
+
 
 @dataclass(frozen=True, slots=True, eq=False)
 class ObjectReference:
@@ -99,6 +109,16 @@ class Plan:
     def swing_intervals(self, foot: int | str) -> tuple[tuple[float, float], ...]:
         """Swing intervals [lift-off, touchdown) of the foot (s)."""
         return self.contacts.swing_intervals(foot)
+
+    def stance_start(self, foot: int | str, t: float) -> float | None:
+        """Touchdown time (s) that starts the foot's stance containing t; during a swing, the
+        touchdown ending it; None for the initial stance (no touchdown before t)."""
+        return self.contacts.stance_start(foot, t)
+
+    def gait_period_at(self, t: float) -> float:
+        """Gait period (s) of the locomotion task running at t, else the scenario's nominal."""
+        block = self.contacts.block_at(t)
+        return self.gait_period if block is None else block.period
 
     def footholds_at(self, times: FloatArray) -> FloatArray:
         """Nominal footholds (n, 2, 3) m world: the stance position, or the planned touchdown
@@ -198,23 +218,53 @@ class Plan:
             out += hold.mass * ((times >= hold.lift) & (times < hold.release))
         return out
 
+    def held_mass_at(self, t: float) -> float:
+        """Total mass held at t (kg): scalar `held_mass`."""
+        return sum(h.mass for h in self.manipulation.holds if h.lift <= t < h.release)
+
+    def holding_hands(self, t: float) -> tuple[int, ...]:
+        """Indices (0 left, 1 right) of the hands carrying an object's weight at t (from its
+        lift-off to its release), sorted; empty when nothing is held."""
+        hands: set[int] = set()
+        for h in self.manipulation.holds:
+            if h.lift <= t < h.release:
+                hands.update(HAND_NAMES.index(x) for x in h.hands)
+        return tuple(sorted(hands))
+
     def object_target(self, name: str) -> ObjectTarget:
         """Where the object should end up (KeyError for an undeclared name)."""
         return self.manipulation.targets[name]
 
     def object_reference(self, times: FloatArray) -> ObjectReference:
-        """Planned load at `times` (n,) for the MPC: flags, mass and object centre, evaluated
-        along the planned trunk reference. A one-hand hold puts the centre half the grip
-        width from the hand towards the trunk's centre line (an approximation)."""
+        """Planned load at `times` (n,) for the MPC: flags, mass and object centre along the
+        planned trunk reference (see `object_positions`)."""
+        times = np.asarray(times, dtype=float)
+        return ObjectReference(
+            self.object_held(times), self.held_mass(times), self.object_positions(times)
+        )
+
+    def object_positions(
+        self,
+        times: FloatArray,
+        base_positions: FloatArray | None = None,
+        base_yaws: FloatArray | None = None,
+    ) -> FloatArray:
+        """Centre (n, 3) m world of the held object at `times` (n,), from the hand targets for
+        the given trunk poses (origins (n, 3) m, yaws (n,) rad; default: the planned
+        reference). Where nothing is held: the trunk position (so r_e = 0 there). A one-hand
+        hold puts the centre half the grip width from the hand towards the trunk's centre line
+        (an approximation)."""
         times = np.asarray(times, dtype=float)
         ref = self.trunk.evaluate(times)
-        position = ref.position.copy()
+        pos_b = ref.position if base_positions is None else np.asarray(base_positions, float)
+        yaw_b = ref.yaw if base_yaws is None else np.asarray(base_yaws, float)
+        position = np.array(pos_b, dtype=float, copy=True)
         held = self.object_held(times)
         for n in np.flatnonzero(held):
             t = float(times[n])
             hold = next(h for h in self.manipulation.holds if h.lift <= t < h.release)
-            yaw = float(ref.yaw[n])
-            px, py, pz = ref.position[n].tolist()
+            yaw = float(yaw_b[n])
+            px, py, pz = pos_b[n].tolist()
             vx, vy, vz = ref.velocity[n].tolist()
             b = BasePose(
                 px, py, pz, math.cos(yaw), math.sin(yaw), vx, vy, vz, float(ref.yaw_rate[n])
@@ -229,7 +279,7 @@ class Plan:
                 side = 1.0 if hold.hands[0] == "L" else -1.0
                 y_axis = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
                 position[n] = pts[0] - side * hold.half_width * y_axis
-        return ObjectReference(held, self.held_mass(times), position)
+        return position
 
     # --- export ----------------------------------------------------------------------------
     def to_dict(self, reference_dt: float = 0.02) -> dict[str, Any]:
