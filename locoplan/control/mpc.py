@@ -1,0 +1,683 @@
+"""Multi-contact MPC (the paper's section "Multi-contact MPC") on the SRBD of `srbd`.
+
+Decision variables: for every step k = 0..N-1 and every foot in stance at k, the line-foot
+wrench w = [Fx', Fy', Fz, My', Mz'] in that foot's yaw frame (N, N m): the force
+F_world = R_z(psi_foot) [Fx', Fy', Fz] and the moment R_z(psi_foot) L [My', Mz']. Swing feet
+have no variables (dropped, not forced to zero by equalities). In the foot's frame the
+constraints are constant rows::
+
+    |Fx'| <= mu Fz,  |Fy'| <= mu Fz                         (friction pyramid, 4 rows)
+    -toe Fz <= My' <= heel Fz                               (line-foot CoP, 2 rows)
+    |Mz'| <= mu_t Fz                                        (optional torsion, 2 rows)
+    f_min <= Fz <= f_max                                    (box)
+
+CoP sign: My' is the moment on the robot about the foot's y axis at the sole point under the
+ankle. A vertical force Fz at x_cop along the foot gives (x_cop, 0, 0) x (0, 0, Fz) =
+(0, -x_cop Fz, 0), so My' = -x_cop Fz and x_cop in [-heel, toe] is -toe Fz <= My' <= heel Fz.
+Toe loading gives a negative My'.
+
+F_ext (Model 2) is not a decision variable: it is known from the plan (-m_o g while held) and
+enters the affine term, so the paper's equality F_ext = [0, 0, m_o g] holds by construction.
+The cost is the paper's sum_{i=0}^{N-1} |x_{i+1} - x_ref_{i+1}|_Q^2 + |U_i|_R^2 (Q diagonal).
+
+Condensed form (default): X = x_free + G w, with H = G'QG + R and g = G'Q(x_free - X_ref).
+G is never formed: every block of G is an affine function of the step distance (the SRBD's A
+is nilpotent), so H is assembled from per-step features Phi_k (6 x 10: the effect of step k's
+wrench on omega and pdot) and a per-step-pair kernel K[k, l] (6 x 6) that depends only on the
+linearisation yaws (cached) -- H[k, l] = Phi_k' K[k, l] Phi_l. The sparse form keeps the
+states as variables with the dynamics as equalities (for comparison).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Final
+
+import numpy as np
+import numpy.typing as npt
+import scipy.sparse as sp
+
+from locoplan.control import srbd
+from locoplan.control.qp import QpProblem, QpSettings, QpSolution, QpSolver
+from locoplan.exceptions import SolverFailure
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+MODELS: Final[tuple[str, ...]] = ("external-force", "combined")
+FORMULATIONS: Final[tuple[str, ...]] = ("condensed", "sparse")
+FALLBACKS: Final[tuple[str, ...]] = ("none", "relaxed", "shifted")
+
+_DEFAULT_Q: Final = (1500.0, 2000.0, 1000.0, 1000.0, 1000.0, 1000.0, 1.0, 3.0, 10.0,
+                     1.0, 1.0, 1.0, 0.0, 0.0, 0.0)  # fmt: skip
+_DEFAULT_R: Final = tuple(1e-4 * w for w in (1, 1, 1, 1, 1, 1, 5, 5, 5, 5))
+
+
+def _default_qp_settings() -> QpSettings:
+    return QpSettings(
+        eps_abs=1e-6,
+        eps_gap_abs=1e-6,
+        max_iter=100,
+        scaling=True,
+        preconditioner=False,
+        unconstrained_first=True,
+        eps_primal_inf=1e-9,
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class MpcSettings:
+    """MPC parameters (defaults from the paper and robot.md).
+
+    ``dt`` step (s), ``horizon`` N. ``q_diag`` (15,) the diagonal of Q on x_{i+1}; ``r_diag``
+    (10,) the diagonal of R on [F1, F2, M1, M2] (the paper's order). ``mu`` friction
+    coefficient, ``f_min``/``f_max`` vertical force bounds per stance foot (N), ``toe``/``heel``
+    foot lengths ahead of/behind the ankle (m), ``mu_torsion`` (m) bounds |Mz'| <= mu_t Fz if
+    given. ``backend`` "proxsuite" | "piqp", ``formulation`` "condensed" | "sparse", ``qp``
+    the solver settings. ``fallback``: on a failed QP try the relaxed problem (f_min = 0, more
+    iterations, fresh solver), then the previous solution shifted by one step; if False, raise
+    `SolverFailure` at once. The force bounds are not cross-checked here: an empty range makes
+    every QP infeasible, which `MultiContactMpc.update` reports as a failure.
+    """
+
+    dt: float = 0.03
+    horizon: int = 20
+    q_diag: tuple[float, ...] = _DEFAULT_Q
+    r_diag: tuple[float, ...] = _DEFAULT_R
+    mu: float = 0.5
+    f_min: float = 10.0
+    f_max: float = 250.0
+    toe: float = 0.09
+    heel: float = 0.06
+    mu_torsion: float | None = None
+    backend: str = "proxsuite"
+    formulation: str = "condensed"
+    qp: QpSettings = field(default_factory=_default_qp_settings)
+    fallback: bool = True
+
+    def __post_init__(self) -> None:
+        if not self.dt > 0:
+            raise ValueError(f"MpcSettings.dt must be > 0, got {self.dt}")
+        if self.horizon < 1:
+            raise ValueError(f"MpcSettings.horizon must be >= 1, got {self.horizon}")
+        if len(self.q_diag) != srbd.NX or min(self.q_diag) < 0:
+            raise ValueError("MpcSettings.q_diag needs 15 non-negative weights")
+        if len(self.r_diag) != srbd.NU or min(self.r_diag) <= 0:
+            raise ValueError("MpcSettings.r_diag needs 10 positive weights")
+        if self.mu < 0 or self.toe < 0 or self.heel < 0:
+            raise ValueError("MpcSettings: mu, toe and heel must be >= 0")
+        if self.mu_torsion is not None and self.mu_torsion < 0:
+            raise ValueError("MpcSettings.mu_torsion must be >= 0")
+        if self.backend not in ("proxsuite", "piqp"):
+            raise ValueError(f"unknown MPC backend {self.backend!r}")
+        if self.formulation not in FORMULATIONS:
+            raise ValueError(f"unknown MPC formulation {self.formulation!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class MpcInput:
+    """One MPC problem: the state, the reference and the plan over the horizon.
+
+    ``x0`` (15,) the measured state. ``x_ref`` (N, 15) the reference for x_1..x_N.
+    ``contact`` (N, 2) bool, foot i in stance during step k (sigma_Ci). ``p_feet`` (N, 2, 3)
+    planned sole positions (world, m) and ``foot_yaw`` (N, 2) (rad). ``yaw_lin`` (N,) the yaw
+    the dynamics of step k are linearised about (the reference yaw). ``mass`` (kg),
+    ``inertia_body`` (3, 3) (kg m^2, trunk axes). ``object_held`` (N,) bool (sigma_e),
+    ``object_mass`` (kg; a scalar or (N,) per step), ``p_object`` (N, 3) planned object CoM
+    (world, m). ``model``
+    "external-force" (Model 2) or "combined" (Model 1). ``t`` the time (s), for errors.
+
+    The lever arms of step k are taken from the CoM at step k: x0's for k = 0, x_ref[k-1]'s
+    after.
+    """
+
+    x0: FloatArray
+    x_ref: FloatArray
+    contact: BoolArray
+    p_feet: FloatArray
+    foot_yaw: FloatArray
+    yaw_lin: FloatArray
+    mass: float
+    inertia_body: FloatArray
+    object_held: BoolArray
+    object_mass: float | FloatArray = 0.0
+    p_object: FloatArray | None = None
+    model: str = "external-force"
+    t: float = 0.0
+
+    def __post_init__(self) -> None:
+        N = self.x_ref.shape[0]
+        shapes = {
+            "x0": (self.x0.shape, (srbd.NX,)),
+            "x_ref": (self.x_ref.shape, (N, srbd.NX)),
+            "contact": (self.contact.shape, (N, 2)),
+            "p_feet": (self.p_feet.shape, (N, 2, 3)),
+            "foot_yaw": (self.foot_yaw.shape, (N, 2)),
+            "yaw_lin": (self.yaw_lin.shape, (N,)),
+            "inertia_body": (self.inertia_body.shape, (3, 3)),
+            "object_held": (self.object_held.shape, (N,)),
+        }
+        for name, (got, want) in shapes.items():
+            if got != want:
+                raise ValueError(f"MpcInput.{name} has shape {got}, expected {want}")
+        if self.model not in MODELS:
+            raise ValueError(f"MpcInput.model must be one of {MODELS}, got {self.model!r}")
+        m_o = np.asarray(self.object_mass, dtype=np.float64)
+        if m_o.shape not in ((), (N,)):
+            raise ValueError(f"MpcInput.object_mass has shape {m_o.shape}, expected () or ({N},)")
+        if not self.mass > 0 or bool(np.any(m_o < 0)):
+            raise ValueError("MpcInput: mass must be > 0 and object_mass >= 0")
+        if self.p_object is None:
+            if bool(np.any(m_o > 0)) and bool(np.any(self.object_held)):
+                raise ValueError("MpcInput.p_object is needed while an object is held")
+        elif self.p_object.shape != (N, 3):
+            raise ValueError(
+                f"MpcInput.p_object has shape {self.p_object.shape}, expected ({N}, 3)"
+            )
+
+    @property
+    def horizon(self) -> int:
+        """N, the number of steps."""
+        return int(self.x_ref.shape[0])
+
+
+@dataclass(frozen=True, slots=True)
+class MpcSolution:
+    """Result of one MPC update.
+
+    ``ok``: the nominal QP solved. ``status``: its status. ``fallback``: "none", "relaxed"
+    (the relaxed QP gave the forces) or "shifted" (the previous solution, one step on).
+    ``forces_world`` (2, 3) (N) and ``moments_world`` (2, 3) (N m, about the sole point) of the
+    first step, zeros for swing feet. ``U`` (N, 2, 5): per step and foot [Fx, Fy, Fz] in the
+    world and [My', Mz'] in the foot's yaw frame. ``X`` (N, 15) the predicted x_1..x_N.
+    ``build_time_s`` the wall time outside the solver, ``solve_time_s`` inside it (all QPs
+    of this update), ``iterations`` of the QP that gave U, ``qp`` the nominal QpSolution
+    (None when no foot touches the ground in the horizon).
+    """
+
+    ok: bool
+    status: str
+    fallback: str
+    forces_world: FloatArray
+    moments_world: FloatArray
+    U: FloatArray
+    X: FloatArray
+    build_time_s: float
+    solve_time_s: float
+    iterations: int
+    qp: QpSolution | None = field(repr=False)
+
+
+# --- structured pieces ---------------------------------------------------------------------
+
+
+def _rot_z_stack(yaw: FloatArray) -> FloatArray:
+    """Rotations about z, shape yaw.shape + (3, 3)."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    R = np.zeros((*yaw.shape, 3, 3))
+    R[..., 0, 0] = c
+    R[..., 0, 1] = -s
+    R[..., 1, 0] = s
+    R[..., 1, 1] = c
+    R[..., 2, 2] = 1.0
+    return R
+
+
+def _suffix_sum(a: FloatArray) -> FloatArray:
+    """s_k = sum_{i >= k} a_i along axis 0."""
+    return np.cumsum(a[::-1], axis=0)[::-1]
+
+
+@dataclass(frozen=True, slots=True)
+class _Kernel:
+    """Cached per (N, dt, Q, yaw_lin): the step-pair kernel and gradient helpers.
+
+    ``K_cols`` (N, 6N, 6): column block l of the (6N, 6N) matrix of blocks K[k, l].
+    ``C`` (N, 3, 3): C_i = sum_{j <= i} R_z(yaw_j)^T; ``E`` (N, 3, 3): C_k - R_z(yaw_k)^T / 2,
+    so that the pitch/roll/yaw response of x_{i+1} to step k's omega kick is
+    dt (C_i - E_k) (i >= k). ``RzT`` (N, 3, 3).
+    """
+
+    K_cols: FloatArray
+    C: FloatArray
+    E: FloatArray
+    RzT: FloatArray
+
+
+def _build_kernel(N: int, dt: float, q: FloatArray, yaw_lin: FloatArray) -> _Kernel:
+    q_th, q_p, q_w, q_v = q[0:3], q[3:6], q[6:9], q[9:12]
+    RzT = np.swapaxes(_rot_z_stack(yaw_lin), -1, -2)
+    C = np.cumsum(RzT, axis=0)
+    E = C - 0.5 * RzT
+    idx = np.arange(N)
+    mx = np.maximum.outer(idx, idx)  # max(k, l)
+    cnt = (N - mx).astype(np.float64)  # number of i with i >= max(k, l)
+    # Sp[k, l] = sum_{i >= max(k,l)} (i - k + 1/2)(i - l + 1/2)
+    i = idx[:, None, None]
+    terms = np.where(
+        i >= mx[None], (i - idx[None, :, None] + 0.5) * (i - idx[None, None, :] + 0.5), 0.0
+    )
+    Sp = terms.sum(axis=0)
+    # Theta kernel: T[k, l] = sum_{i >= m} (C_i - E_k)' Q (C_i - E_l), m = max(k, l).
+    QC = q_th[None, :, None] * C  # Q C_i
+    S1 = _suffix_sum(QC)  # sum_{i >= m} Q C_i
+    S2 = _suffix_sum(np.swapaxes(C, 1, 2) @ QC)  # sum_{i >= m} C_i' Q C_i
+    S1m = S1[mx]  # (N, N, 3, 3)
+    ET = np.swapaxes(E, 1, 2)
+    T = (
+        S2[mx]
+        - ET[:, None] @ S1m
+        - np.swapaxes(S1m, -1, -2) @ E[None, :]
+        + cnt[..., None, None] * (ET[:, None] @ (q_th[:, None] * E)[None, :])
+    )
+    K = np.zeros((N, N, 6, 6))
+    K[:, :, 0:3, 0:3] = dt * dt * T + cnt[..., None, None] * np.diag(q_w)
+    diag_v = cnt[..., None] * q_v + (dt * dt) * Sp[..., None] * q_p  # (N, N, 3)
+    K[:, :, 3, 3] = diag_v[..., 0]
+    K[:, :, 4, 4] = diag_v[..., 1]
+    K[:, :, 5, 5] = diag_v[..., 2]
+    K_cols = np.ascontiguousarray(K.transpose(1, 0, 2, 3).reshape(N, 6 * N, 6))
+    return _Kernel(K_cols=K_cols, C=C, E=E, RzT=RzT)
+
+
+@dataclass(frozen=True, slots=True)
+class _StepTerms:
+    """Per-step quantities of one problem (all world frame).
+
+    ``Iinv`` (N, 3, 3) inverse world inertia, ``mass`` (N,), ``tau_ext`` (N, 3) and
+    ``f_ext`` (N, 3) the known external torque about the lever origin and force, ``Tw`` (N, 2,
+    3, 5) the torque of a unit foot-frame wrench, ``Rf`` (N, 2, 3, 3) the foot rotations,
+    ``Phi`` (N, 6, 10) the omega/pdot kicks of the 10 wrench components of step k (zero
+    columns for swing feet), ``cols`` the stance variable indices into the 10N layout.
+    """
+
+    Iinv: FloatArray
+    mass: FloatArray
+    tau_ext: FloatArray
+    f_ext: FloatArray
+    Tw: FloatArray
+    Rf: FloatArray
+    Phi: FloatArray
+    cols: npt.NDArray[np.intp]
+
+
+def _step_terms(inp: MpcInput, dt: float, Ib_inv: FloatArray, Ib: FloatArray) -> _StepTerms:
+    N = inp.horizon
+    Rz = _rot_z_stack(inp.yaw_lin)
+    p_com = np.empty((N, 3))
+    p_com[0] = inp.x0[srbd.POS]
+    p_com[1:] = inp.x_ref[:-1, srbd.POS]
+    mass = np.full(N, inp.mass)
+    tau_ext = np.zeros((N, 3))
+    f_ext = np.zeros((N, 3))
+    m_o = np.broadcast_to(np.asarray(inp.object_mass, dtype=np.float64), (N,))
+    held = inp.object_held & (m_o > 0.0)
+    lever = p_com
+    if inp.model == "combined" and held.any():
+        assert inp.p_object is not None
+        I_w = Rz @ Ib @ np.swapaxes(Rz, 1, 2)
+        m_t = inp.mass + m_o
+        p_h = (inp.mass * p_com + m_o[:, None] * inp.p_object) / m_t[:, None]
+        d_c = p_com - p_h
+        d_o = inp.p_object - p_h
+        eye = np.eye(3)
+        pm = inp.mass * (np.einsum("ki,ki->k", d_c, d_c)[:, None, None] * eye
+                         - d_c[:, :, None] * d_c[:, None, :])  # fmt: skip
+        pm += m_o[:, None, None] * (np.einsum("ki,ki->k", d_o, d_o)[:, None, None] * eye
+                     - d_o[:, :, None] * d_o[:, None, :])  # fmt: skip
+        I_w = np.where(held[:, None, None], I_w + pm, I_w)
+        Iinv = np.asarray(np.linalg.inv(I_w), dtype=np.float64)
+        mass = np.where(held, m_t, mass)
+        lever = np.where(held[:, None], p_h, p_com)
+    else:
+        Iinv = Rz @ Ib_inv @ np.swapaxes(Rz, 1, 2)
+        if held.any():
+            assert inp.p_object is not None
+            f_ext[held, 2] = -m_o[held] * srbd.GRAVITY
+            tau_ext = np.cross(inp.p_object - p_com, f_ext)
+    r = inp.p_feet - lever[:, None, :]  # (N, 2, 3)
+    Rf = _rot_z_stack(inp.foot_yaw)  # (N, 2, 3, 3)
+    Tw = np.empty((N, 2, 3, 5))
+    # column j of skew(r) Rf is r x Rf[:, j]
+    Tw[..., 0:3] = np.swapaxes(np.cross(r[:, :, None, :], np.swapaxes(Rf, -1, -2)), -1, -2)
+    Tw[..., 3:5] = Rf[..., 1:3]
+    stance = inp.contact.astype(np.float64)[:, :, None, None]
+    Phi4 = np.zeros((N, 2, 6, 5))
+    Phi4[:, :, 0:3, :] = dt * np.einsum("kij,kfja->kfia", Iinv, Tw) * stance
+    Phi4[:, :, 3:6, 0:3] = (dt / mass)[:, None, None, None] * Rf * stance
+    Phi = np.ascontiguousarray(Phi4.transpose(0, 2, 1, 3).reshape(N, 6, 10))
+    cols = np.flatnonzero(np.repeat(inp.contact.reshape(-1), 5))
+    return _StepTerms(Iinv=Iinv, mass=mass, tau_ext=tau_ext, f_ext=f_ext, Tw=Tw, Rf=Rf,
+                      Phi=Phi, cols=cols)  # fmt: skip
+
+
+def propagate(
+    x0: FloatArray,
+    RzT: FloatArray,
+    Iinv: FloatArray,
+    mass: FloatArray,
+    tau: FloatArray,
+    force: FloatArray,
+    dt: float,
+) -> FloatArray:
+    """Exact ZOH rollout x_1..x_N (N, 15) of the SRBD under known per-step wrenches.
+
+    x0 (15,), RzT (N, 3, 3) = R_z(yaw_lin_k)^T, Iinv (N, 3, 3) world inverse inertia (kg^-1
+    m^-2), mass (N,) (kg), tau (N, 3) the torque about the CoM (N m) and force (N, 3) the
+    contact plus external force (N), both world and constant over each step.
+    """
+    N = tau.shape[0]
+    g0 = x0[srbd.GRAV]
+    a_w = dt * np.einsum("kij,kj->ki", Iinv, tau)
+    a_v = dt * (force / mass[:, None] + g0)
+    Om = np.cumsum(a_w, axis=0)
+    V = np.cumsum(a_v, axis=0)
+    X = np.empty((N, srbd.NX))
+    X[:, srbd.OMEGA] = x0[srbd.OMEGA] + Om
+    X[:, srbd.VEL] = x0[srbd.VEL] + V
+    X[:, srbd.POS] = x0[srbd.POS] + np.cumsum(dt * (x0[srbd.VEL] + V - 0.5 * a_v), axis=0)
+    w_mid = x0[srbd.OMEGA] + Om - 0.5 * a_w
+    X[:, srbd.THETA] = x0[srbd.THETA] + dt * np.cumsum(np.einsum("kij,kj->ki", RzT, w_mid), axis=0)
+    X[:, srbd.GRAV] = g0
+    return X
+
+
+def _wrench_rows(s: MpcSettings) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Per stance foot: rows (m, 5) and bounds lo, hi with lo <= rows w <= hi."""
+    mu = s.mu
+    rows = [
+        [1.0, 0.0, -mu, 0.0, 0.0],  # Fx' - mu Fz <= 0
+        [1.0, 0.0, mu, 0.0, 0.0],  # Fx' + mu Fz >= 0
+        [0.0, 1.0, -mu, 0.0, 0.0],
+        [0.0, 1.0, mu, 0.0, 0.0],
+        [0.0, 0.0, s.toe, 1.0, 0.0],  # My' + toe Fz >= 0
+        [0.0, 0.0, -s.heel, 1.0, 0.0],  # My' - heel Fz <= 0
+    ]
+    inf = np.inf
+    lo = [-inf, 0.0, -inf, 0.0, 0.0, -inf]
+    hi = [0.0, inf, 0.0, inf, inf, 0.0]
+    if s.mu_torsion is not None:
+        rows += [[0.0, 0.0, -s.mu_torsion, 0.0, 1.0], [0.0, 0.0, s.mu_torsion, 0.0, 1.0]]
+        lo += [-inf, 0.0]
+        hi += [0.0, inf]
+    return np.array(rows), np.array(lo), np.array(hi)
+
+
+class MultiContactMpc:
+    """The MPC across updates: keeps the QP solver, cached matrices, the previous solution."""
+
+    def __init__(self, settings: MpcSettings | None = None) -> None:
+        self.settings = settings if settings is not None else MpcSettings()
+        s = self.settings
+        self._solver = QpSolver(s.backend, s.qp)
+        self._q = np.asarray(s.q_diag, dtype=np.float64)
+        r = np.asarray(s.r_diag, dtype=np.float64)
+        # Per foot [Fx, Fy, Fz, My, Mz] weights from the paper's [F1, F2, M1, M2] order.
+        self._r_foot = np.array([np.r_[r[0:3], r[6:8]], np.r_[r[3:6], r[8:10]]])
+        self._r_full = np.tile(self._r_foot.reshape(-1), s.horizon)
+        self._rows, self._lo, self._hi = _wrench_rows(s)
+        self._kernel_key: bytes | None = None
+        self._kernel: _Kernel | None = None
+        self._ib_key: bytes | None = None
+        self._ib_inv: FloatArray = np.eye(3)
+        self._cons_cache: dict[tuple[int, float, float], tuple[FloatArray, ...]] = {}
+        self._prev_U: FloatArray | None = None
+        self._prev_contact: BoolArray | None = None
+
+    # --- caches ----------------------------------------------------------------------------
+
+    def _get_kernel(self, yaw_lin: FloatArray) -> _Kernel:
+        key = yaw_lin.tobytes()
+        if self._kernel is None or key != self._kernel_key:
+            s = self.settings
+            self._kernel = _build_kernel(s.horizon, s.dt, self._q, yaw_lin)
+            self._kernel_key = key
+        return self._kernel
+
+    def _get_ib_inv(self, Ib: FloatArray) -> FloatArray:
+        key = Ib.tobytes()
+        if key != self._ib_key:
+            self._ib_inv = np.asarray(np.linalg.inv(Ib), dtype=np.float64)
+            self._ib_key = key
+        return self._ib_inv
+
+    def _constraints(self, n_fs: int, f_min: float, f_max: float) -> tuple[FloatArray, ...]:
+        """(C, l, u, x_lower, x_upper) for n_fs stance foot-steps, cached."""
+        key = (n_fs, f_min, f_max)
+        got = self._cons_cache.get(key)
+        if got is not None:
+            return got
+        C = np.asarray(np.kron(np.eye(n_fs), self._rows), dtype=np.float64)
+        l = np.tile(self._lo, n_fs)
+        u = np.tile(self._hi, n_fs)
+        lb = np.tile(np.array([-np.inf, -np.inf, f_min, -np.inf, -np.inf]), n_fs)
+        ub = np.tile(np.array([np.inf, np.inf, f_max, np.inf, np.inf]), n_fs)
+        if len(self._cons_cache) > 64:
+            self._cons_cache.clear()
+        self._cons_cache[key] = (C, l, u, lb, ub)
+        return (C, l, u, lb, ub)
+
+    # --- problem construction --------------------------------------------------------------
+
+    def _condensed(
+        self, inp: MpcInput, st: _StepTerms, kern: _Kernel, x_free: FloatArray,
+        f_min: float, f_max: float,
+    ) -> QpProblem:  # fmt: skip
+        s = self.settings
+        N, dt, q = s.horizon, s.dt, self._q
+        Phi = st.Phi
+        # H_full[k, l] = Phi_k' K[k, l] Phi_l, as two batched products.
+        Y = kern.K_cols @ Phi  # (N, 6N, 10): column block l of K Phi_bd
+        Y2 = Y.transpose(1, 0, 2).reshape(N, 6, 10 * N)
+        H = (np.swapaxes(Phi, 1, 2) @ Y2).reshape(10 * N, 10 * N)
+        H[np.diag_indices_from(H)] += self._r_full
+        # Gradient: g_k = Phi_k' lambda_k with the adjoint lambda from suffix sums.
+        e = x_free - inp.x_ref
+        u_th = q[0:3] * e[:, srbd.THETA]
+        a_th = np.einsum("kji,kj->ki", kern.C, u_th)
+        lam_w = _suffix_sum(q[6:9] * e[:, srbd.OMEGA])
+        lam_w += dt * (_suffix_sum(a_th) - np.einsum("kji,kj->ki", kern.E, _suffix_sum(u_th)))
+        w_p = q[3:6] * e[:, srbd.POS]
+        k_idx = np.arange(N, dtype=np.float64)[:, None]
+        lam_v = _suffix_sum(q[9:12] * e[:, srbd.VEL])
+        lam_v += dt * (_suffix_sum(k_idx * w_p) - (k_idx - 0.5) * _suffix_sum(w_p))
+        lam = np.concatenate([lam_w, lam_v], axis=1)
+        g = np.einsum("kia,ki->ka", Phi, lam).reshape(-1)
+        cols = st.cols
+        if cols.shape[0] != 10 * N:
+            H = H[np.ix_(cols, cols)]
+            g = g[cols]
+        C, l, u, lb, ub = self._constraints(cols.shape[0] // 5, f_min, f_max)
+        return QpProblem(H=H, g=g, C=C, l=l, u=u, x_lower=lb, x_upper=ub)
+
+    def _sparse(
+        self, inp: MpcInput, st: _StepTerms, kern: _Kernel, f_min: float, f_max: float
+    ) -> QpProblem:
+        """States x_1..x_N (12 each, gravity folded into the affine term) and w as variables."""
+        s = self.settings
+        N, dt = s.horizon, s.dt
+        nxr = 12
+        cols = st.cols
+        nu = cols.shape[0]
+        nz = nxr * N + nu
+        q12 = self._q[:nxr]
+        # Discrete per-step pieces (rows in state order Theta, p, omega, pdot).
+        Phi = st.Phi  # (N, 6, 10): omega rows 0:3, pdot rows 3:6
+        B12 = np.zeros((N, nxr, 10))
+        B12[:, 0:3] = 0.5 * dt * (kern.RzT @ Phi[:, 0:3])
+        B12[:, 3:6] = 0.5 * dt * Phi[:, 3:6]
+        B12[:, 6:9] = Phi[:, 0:3]
+        B12[:, 9:12] = Phi[:, 3:6]
+        # Affine part of each step: gravity and the known external wrench.
+        g0 = inp.x0[srbd.GRAV]
+        a_w = dt * np.einsum("kij,kj->ki", st.Iinv, st.tau_ext)
+        a_v = dt * (st.f_ext / st.mass[:, None] + g0)
+        c = np.zeros((N, nxr))
+        c[:, 0:3] = 0.5 * dt * np.einsum("kij,kj->ki", kern.RzT, a_w)
+        c[:, 3:6] = 0.5 * dt * a_v
+        c[:, 6:9] = a_w
+        c[:, 9:12] = a_v
+        A12 = np.broadcast_to(np.eye(nxr), (N, nxr, nxr)).copy()
+        A12[:, 0:3, 6:9] = dt * kern.RzT
+        A12[:, 3:6, 9:12] = dt * np.eye(3)
+        # Equalities: x_{k+1} - A_k x_k - B_k w_k = c_k (x_0 known: moved to b).
+        rows: list[npt.NDArray[np.intp]] = []
+        colz: list[npt.NDArray[np.intp]] = []
+        vals: list[FloatArray] = []
+        eye_r = np.arange(nxr * N)
+        rows.append(eye_r)
+        colz.append(eye_r)
+        vals.append(np.ones(nxr * N))
+        if N > 1:
+            kk, ii, jj = np.meshgrid(np.arange(1, N), np.arange(nxr), np.arange(nxr), indexing="ij")
+            rows.append((kk * nxr + ii).reshape(-1))
+            colz.append(((kk - 1) * nxr + jj).reshape(-1))
+            vals.append(-A12[1:].reshape(-1))
+        # Input blocks: column j of w belongs to step cols[j] // 10.
+        step_of = cols // 10
+        ib, jb = np.meshgrid(np.arange(nxr), np.arange(nu), indexing="ij")
+        rows.append((step_of[jb] * nxr + ib).reshape(-1))
+        colz.append((nxr * N + jb).reshape(-1))
+        vals.append(-B12[step_of[jb], ib, cols[jb] % 10].reshape(-1))
+        A_eq = sp.csc_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(colz))),
+            shape=(nxr * N, nz),
+        )
+        b = c.copy()
+        b[0] += A12[0] @ inp.x0[:nxr]
+        H = sp.diags(np.concatenate([np.tile(q12, N), self._r_full[cols]]), format="csc")
+        g = np.concatenate([-(q12 * inp.x_ref[:, :nxr]).reshape(-1), np.zeros(nu)])
+        C_w, l, u, lbw, ubw = self._constraints(nu // 5, f_min, f_max)
+        C = sp.hstack([sp.csc_matrix((C_w.shape[0], nxr * N)), sp.csc_matrix(C_w)], format="csc")
+        lb = np.concatenate([np.full(nxr * N, -np.inf), lbw])
+        ub = np.concatenate([np.full(nxr * N, np.inf), ubw])
+        return QpProblem(H=H, g=g, A=A_eq, b=b.reshape(-1), C=C, l=l, u=u, x_lower=lb, x_upper=ub)
+
+    # --- update ----------------------------------------------------------------------------
+
+    def update(self, inp: MpcInput) -> MpcSolution:
+        """Build and solve the MPC QP for ``inp``; see `MpcSolution`.
+
+        Raises `SolverFailure` only when the QP, the relaxed QP and the shifted previous
+        solution all fail (or at once when ``settings.fallback`` is False).
+        """
+        s = self.settings
+        if inp.horizon != s.horizon:
+            raise ValueError(f"MpcInput horizon {inp.horizon} != settings.horizon {s.horizon}")
+        t0 = time.perf_counter()
+        kern = self._get_kernel(np.ascontiguousarray(inp.yaw_lin, dtype=np.float64))
+        Ib = np.asarray(inp.inertia_body, dtype=np.float64)
+        st = _step_terms(inp, s.dt, self._get_ib_inv(Ib), Ib)
+        x_free = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, st.tau_ext, st.f_ext, s.dt)
+        N = s.horizon
+        nu = st.cols.shape[0]
+        if nu == 0:
+            U = np.zeros((N, 2, 5))
+            zeros = np.zeros((2, 3))
+            return MpcSolution(True, "no_contact", "none", zeros, zeros.copy(), U, x_free,
+                               time.perf_counter() - t0, 0.0, 0, None)  # fmt: skip
+        qp = self._problem(inp, st, kern, x_free, s.f_min, s.f_max)
+        t1 = time.perf_counter()
+        sol = self._solver.solve(qp)
+        t2 = time.perf_counter()
+        solve_time = sol.solve_time_s
+        outside = (t1 - t0) + (t2 - t1 - sol.solve_time_s)
+        fallback = "none"
+        used = sol
+        w: FloatArray | None = sol.x[-nu:] if sol.ok else None
+        if w is None:
+            if not s.fallback:
+                raise SolverFailure(inp.t, "mpc", s.backend, sol.status)
+            t3 = time.perf_counter()
+            relaxed_qp = self._problem(inp, st, kern, x_free, 0.0, max(s.f_max, s.f_min))
+            relaxed = QpSolver(s.backend, _relaxed_settings(s.qp)).solve(relaxed_qp)
+            solve_time += relaxed.solve_time_s
+            outside += time.perf_counter() - t3 - relaxed.solve_time_s
+            if relaxed.ok:
+                w = relaxed.x[-nu:]
+                fallback, used = "relaxed", relaxed
+        t4 = time.perf_counter()
+        if w is not None:
+            U_foot = np.zeros((N * 10,))
+            U_foot[st.cols] = w
+            U_foot3 = U_foot.reshape(N, 2, 5)
+        else:
+            shifted = self._shifted(inp)
+            if shifted is None:
+                raise SolverFailure(inp.t, "mpc", s.backend, sol.status, "no fallback left")
+            U_foot3 = shifted
+            fallback = "shifted"
+        U, X = self._finish(inp, st, kern, U_foot3)
+        self._prev_U, self._prev_contact = U_foot3, inp.contact.copy()
+        outside += time.perf_counter() - t4
+        F0 = U[0, :, 0:3].copy()
+        M0 = np.einsum("fij,fj->fi", st.Rf[0][:, :, 1:3], U[0, :, 3:5])
+        return MpcSolution(
+            ok=sol.ok,
+            status=sol.status,
+            fallback=fallback,
+            forces_world=F0,
+            moments_world=M0,
+            U=U,
+            X=X,
+            build_time_s=outside,
+            solve_time_s=solve_time,
+            iterations=used.iterations,
+            qp=sol,
+        )
+
+    def _problem(
+        self, inp: MpcInput, st: _StepTerms, kern: _Kernel, x_free: FloatArray,
+        f_min: float, f_max: float,
+    ) -> QpProblem:  # fmt: skip
+        if self.settings.formulation == "sparse":
+            return self._sparse(inp, st, kern, f_min, f_max)
+        return self._condensed(inp, st, kern, x_free, f_min, f_max)
+
+    def _finish(
+        self, inp: MpcInput, st: _StepTerms, kern: _Kernel, U_foot: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """U in the output convention and the predicted states from the foot-frame wrenches."""
+        F_world = np.einsum("kfij,kfj->kfi", st.Rf, U_foot[..., 0:3])
+        tau = np.einsum("kfia,kfa->ki", st.Tw, U_foot) + st.tau_ext
+        force = F_world.sum(axis=1) + st.f_ext
+        X = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, tau, force, self.settings.dt)
+        U = np.concatenate([F_world, U_foot[..., 3:5]], axis=2)
+        return U, X
+
+    def _shifted(self, inp: MpcInput) -> FloatArray | None:
+        """The previous foot-frame wrenches one step on; weight share where none is known."""
+        if self._prev_U is None or self._prev_contact is None:
+            return None
+        N = self.settings.horizon
+        U = np.zeros((N, 2, 5))
+        prev, prev_c = self._prev_U, self._prev_contact
+        for k in range(N):
+            n_st = int(inp.contact[k].sum())
+            for f in range(2):
+                if not inp.contact[k, f]:
+                    continue
+                if k + 1 < N and prev_c[k + 1, f]:
+                    U[k, f] = prev[k + 1, f]
+                else:
+                    U[k, f, 2] = inp.mass * srbd.GRAVITY / max(n_st, 1)
+        return U
+
+
+def _relaxed_settings(qp: QpSettings) -> QpSettings:
+    """Settings for the relaxed retry: cold, more iterations, the solver's own equilibration."""
+    return QpSettings(
+        eps_abs=qp.eps_abs,
+        eps_rel=qp.eps_rel,
+        check_duality_gap=qp.check_duality_gap,
+        eps_gap_abs=qp.eps_gap_abs,
+        eps_gap_rel=qp.eps_gap_rel,
+        max_iter=5 * qp.max_iter,
+        warm_start=False,
+        update_preconditioner=True,
+        scaling=True,
+        preconditioner=True,
+        unconstrained_first=False,
+        eps_primal_inf=qp.eps_primal_inf,
+    )
