@@ -19,9 +19,11 @@ GAIT_MIN_DOUBLE_SUPPORT: Final = 0.02
 # outside the object's sides). PICK_REACH_END .. PICK_CONTACT: squeeze in to the sides; the hand
 # contact (sigma_H) starts at PICK_CONTACT. PICK_CONTACT .. PICK_LIFTOFF: hold still while the
 # grip builds. PICK_LIFTOFF: the object leaves its support (sigma_e starts).
+# The squeeze gets 15% of the duration so that the hands meet the object slowly (about
+# 0.4 m/s for a 1 s pick) instead of slamming into it.
 # PICK_LIFTOFF .. PICK_RAISE_END: raise straight up by PICK_RAISE_HEIGHT (clean lift-off, no
 # sliding on the support). PICK_RAISE_END .. 1: move to the carry pose in the trunk frame.
-PICK_REACH_END: Final = 0.50
+PICK_REACH_END: Final = 0.40
 PICK_CONTACT: Final = 0.55
 PICK_LIFTOFF: Final = 0.60
 PICK_RAISE_END: Final = 0.75
@@ -32,10 +34,11 @@ PICK_RAISE_HEIGHT: Final = 0.04
 # DROP_HOVER_END .. DROP_RELEASE: lower onto the support and settle; at DROP_RELEASE the hands
 # let go (sigma_H and sigma_e end). DROP_RELEASE .. DROP_OPEN_END: open sideways to the grasp
 # clearance (world frame, so the object is not dragged). DROP_OPEN_END .. 1: retract to the
-# default pose in the trunk frame.
-DROP_HOVER_END: Final = 0.70
-DROP_RELEASE: Final = 0.80
-DROP_OPEN_END: Final = 0.88
+# default pose in the trunk frame. The release comes at 75% rather than later so that the
+# retract does not demand hand speeds above about 1.5 m/s for 0.8 s drops.
+DROP_HOVER_END: Final = 0.60
+DROP_RELEASE: Final = 0.75
+DROP_OPEN_END: Final = 0.83
 DROP_HOVER_HEIGHT: Final = 0.04
 # Margin between the object's footprint and the edge of a fixture's top (m).
 PLACE_MARGIN: Final = 0.02
@@ -45,12 +48,13 @@ PLACE_MARGIN: Final = 0.02
 # accelerate along a straight line in the trunk frame from rest to the commanded velocity
 # (profile 2 tau^3 - tau^4: zero acceleration at both ends, so the line is |v| T / 2 long);
 # release at THROW_RELEASE. THROW_RELEASE .. THROW_FOLLOW_END: decelerate along the same line
-# to rest (mirror profile). THROW_FOLLOW_END .. 1: return to the default pose.
-THROW_WINDUP_END: Final = 0.40
-THROW_RELEASE: Final = 0.70
-THROW_FOLLOW_END: Final = 0.80
+# to rest (mirror profile). THROW_FOLLOW_END .. 1: return to the default pose (28% of the
+# duration, so the return stays below about 1.5 m/s for 0.8 s throws).
+THROW_WINDUP_END: Final = 0.45
+THROW_RELEASE: Final = 0.65
+THROW_FOLLOW_END: Final = 0.72
 # The release point lies this far beyond the carry pose along the throw direction (m).
-THROW_RELEASE_OFFSET: Final = 0.06
+THROW_RELEASE_OFFSET: Final = 0.10
 
 # --- hand poses ------------------------------------------------------------------------------
 # Default (carry-ready) hand position of the LEFT hand in trunk (m); right hand mirrors y.

@@ -1,0 +1,132 @@
+"""Hand target tracks (locoplan.plan.hands): continuity, rest at segment ends, velocities."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from plan_fixtures import repo_scenario, scenario_files
+
+from locoplan.plan import Plan, compile_plan
+from locoplan.plan.constants import (
+    CARRY_FORWARD,
+    CARRY_HEIGHT,
+    GRASP_SQUEEZE,
+    HAND_DEFAULT_IN_TRUNK,
+)
+from locoplan.scenario import load_scenario
+
+
+def _targets_along_plan(plan: Plan, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Hand positions and velocities (n, 2, 3) with the trunk on its planned reference."""
+    p = np.empty((times.size, 2, 3))
+    v = np.empty((times.size, 2, 3))
+    for i, t in enumerate(times):
+        st = plan.trunk_reference_at(float(t))
+        ht = plan.hand_targets_at(float(t), st.position, st.yaw)
+        p[i] = ht.positions
+        v[i] = ht.velocities
+    return p, v
+
+
+@pytest.mark.parametrize("path", scenario_files(), ids=lambda p: p.stem)
+def test_hand_targets_continuous_and_velocity_consistent(path) -> None:
+    plan = compile_plan(load_scenario(path))
+    boundaries = np.array(
+        sorted({t for tr in plan.manipulation.tracks for g in tr.segments for t in (g.t0, g.t1)})
+        or [0.5 * plan.t_end]
+    )
+    # Continuity across every segment boundary: hand speeds stay below 2 m/s, so 2e-7 s
+    # apart the targets differ by < 4e-7 m; a mismatch between segments would be millimetres.
+    eps = 1e-7
+    p_before, _ = _targets_along_plan(plan, boundaries - eps)
+    p_after, _ = _targets_along_plan(plan, boundaries + eps)
+    assert np.abs(p_after - p_before).max() < 1e-6
+    # The velocity output is the time derivative of the position output (the trunk moving
+    # along its plan), at random times and next to every boundary. Central differences with
+    # h = 1e-6 s: truncation h^2 jerk / 6 < 1e-9 m/s (jerk < 1e3 m/s^3), rounding ~1e-10 m/s;
+    # acceleration is continuous at the boundaries, so 1e-6 m/s has ample margin.
+    rng = np.random.default_rng(1)
+    times = np.concatenate(
+        [rng.uniform(0.0, plan.t_end, 1500), boundaries - 1e-4, boundaries + 1e-4]
+    )
+    h = 1e-6
+    p_plus, _ = _targets_along_plan(plan, times + h)
+    p_minus, _ = _targets_along_plan(plan, times - h)
+    _, v = _targets_along_plan(plan, times)
+    assert np.abs((p_plus - p_minus) / (2 * h) - v).max() < 1e-6
+
+
+@pytest.mark.parametrize("name", ["package-transfer", "pick-walk-drop", "throw", "standing-load"])
+def test_hands_at_rest_at_segment_ends_relative_to_their_frame(name) -> None:
+    plan = compile_plan(repo_scenario(name))
+    for track in plan.manipulation.tracks:
+        for g in track.segments:
+            for t, w in ((g.t0, g.start), (g.t1, g.end)):
+                if any(w.velocity):
+                    continue  # the throw's release point moves on purpose
+                # World waypoints: a still trunk and a moving one give zero target velocity;
+                # trunk waypoints: the target moves exactly with the trunk.
+                base = np.array([0.1, -0.2, 0.6])
+                ht = plan.hand_targets_at(t, base, 0.3, np.zeros(3), 0.0)
+                vel = ht.v_L_world if track.hand == "L" else ht.v_R_world
+                assert np.linalg.norm(vel) < 1e-12
+
+
+def test_default_pose_before_any_task_follows_trunk() -> None:
+    plan = compile_plan(repo_scenario("package-transfer"))
+    base = np.array([1.0, 2.0, 0.6])
+    yaw = math.radians(40.0)
+    ht = plan.hand_targets_at(0.0, base, yaw, np.array([0.2, 0.0, 0.0]), 0.5)
+    x, y, z = HAND_DEFAULT_IN_TRUNK
+    c, s = math.cos(yaw), math.sin(yaw)
+    assert ht.p_L_world == pytest.approx(
+        base + np.array([c * x - s * y, s * x + c * y, z]), abs=1e-15
+    )
+    assert ht.p_R_world == pytest.approx(
+        base + np.array([c * x + s * y, s * x - c * y, z]), abs=1e-15
+    )
+    # rigid motion with the trunk: v = v_base + w x r
+    r = np.array([c * x - s * y, s * x + c * y, z])
+    assert ht.v_L_world == pytest.approx([0.2 - 0.5 * r[1], 0.5 * r[0], 0.0], abs=1e-15)
+    assert not plan.hand_active("L", 0.0)
+
+
+def test_pick_targets_and_carry_pose() -> None:
+    plan = compile_plan(repo_scenario("package-transfer"))
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    hold = plan.holds[0]
+    # the robot turns in place at the origin, the package is at +y: approach along +y, the
+    # grasp axis along x with the left hand on the robot's left after the turn (-x side)
+    grip = next(g for g in plan.manipulation.tracks[0].segments if g.label == "grip")
+    assert grip.start.frame == "world"
+    assert grip.start.point == pytest.approx((-(0.10 - GRASP_SQUEEZE), 0.35, 0.545), abs=1e-12)
+    # at the pick's end the hands are at the carry pose in the trunk frame
+    st = plan.trunk_reference_at(pick.end)
+    ht = plan.hand_targets_at(pick.end, st.position, st.yaw)
+    c, s = math.cos(st.yaw), math.sin(st.yaw)
+    local_l = np.array(
+        [
+            c * (ht.p_L_world[0] - st.position[0]) + s * (ht.p_L_world[1] - st.position[1]),
+            -s * (ht.p_L_world[0] - st.position[0]) + c * (ht.p_L_world[1] - st.position[1]),
+            ht.p_L_world[2] - st.position[2],
+        ]
+    )
+    assert local_l == pytest.approx(
+        [CARRY_FORWARD, hold.half_width - 0.01, CARRY_HEIGHT], abs=1e-12
+    )
+    assert plan.hand_active("L", pick.start + 0.01)
+    assert plan.hand_active("R", 0.5 * (pick.end + plan.tasks[3].start))  # carrying
+
+
+def test_throw_reaches_commanded_velocity_at_release() -> None:
+    plan = compile_plan(repo_scenario("throw"))
+    throw = next(t for t in plan.tasks if t.action == "throw")
+    hold = plan.holds[0]
+    st = plan.trunk_reference_at(hold.release)
+    ht = plan.hand_targets_at(hold.release, st.position, st.yaw, np.zeros(3), 0.0)
+    # relative to a still trunk at yaw 0 the hands move at the commanded body velocity
+    assert st.yaw == 0.0
+    assert ht.v_L_world == pytest.approx(throw.velocity, abs=1e-12)
+    assert ht.v_R_world == pytest.approx(throw.velocity, abs=1e-12)

@@ -1,0 +1,173 @@
+"""Manipulation plan (locoplan.plan.manipulation, geometry): holds, contacts, targets."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from plan_fixtures import repo_scenario, scenario_from_text
+
+from locoplan.plan import PlanError, compile_plan
+from locoplan.plan import constants as k
+from locoplan.plan.geometry import ballistic_landing, support_half_width
+from locoplan.scenario.model import ObjectSpec
+
+TIME_TOL = 1e-9  # float rounding of start + fraction * duration
+
+
+def test_package_transfer_schedules_sigma_h_and_sigma_e() -> None:
+    plan = compile_plan(repo_scenario("package-transfer"))
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    drop = next(t for t in plan.tasks if t.action == "drop")
+    (hold,) = plan.holds
+    assert hold.object == "package" and hold.mass == 3.0 and hold.hands == ("L", "R")
+    assert hold.grasp == pytest.approx(pick.at_fraction(k.PICK_CONTACT), abs=TIME_TOL)
+    assert hold.lift == pytest.approx(pick.at_fraction(k.PICK_LIFTOFF), abs=TIME_TOL)
+    assert hold.release == pytest.approx(drop.at_fraction(k.DROP_RELEASE), abs=TIME_TOL)
+    assert hold.release_kind == "drop" and drop.hands == "both"
+    for hand in ("L", "R"):
+        assert plan.hand_contact_intervals(hand) == ((hold.grasp, hold.release),)
+    times = np.array([hold.grasp - 1e-6, hold.grasp, hold.lift, hold.release - 1e-6, hold.release])
+    assert plan.object_held(times).tolist() == [False, False, True, True, False]
+    assert plan.hand_contact_flags(times)[:, 0].tolist() == [False, True, True, True, False]
+    assert plan.held_mass(times).tolist() == [0.0, 0.0, 3.0, 3.0, 0.0]
+    assert plan.held_object(hold.lift) == "package"
+    assert plan.held_object(hold.release) is None
+    assert plan.held_mass_at(hold.lift + 0.1) == 3.0
+    assert plan.holding_hands(hold.lift + 0.1) == (0, 1)
+    assert plan.holding_hands(hold.grasp) == ()
+    kinds = [e.kind for e in plan.events if e.detail == "package"]
+    assert kinds == ["grasp", "lift", "release"]
+
+
+def test_drop_onto_conveyor_is_fully_supported_nearest_the_robot() -> None:
+    scenario = repo_scenario("package-transfer")
+    plan = compile_plan(scenario)
+    target = plan.object_target("package")
+    conveyor = scenario.fixtures["conveyor"]
+    assert target.kind == "place" and target.fixture == "conveyor"
+    x, y, z = target.position
+    # top at 0.47 + half height 0.075
+    assert z == pytest.approx(conveyor.size[2] + 0.075, abs=1e-12)
+    # the conveyor runs along world y (yaw 90): across it (world x) the box's centre may move
+    # 0.35 / 2 - margin - 0.10 from the belt's centre line; the robot is at x = 0
+    assert x == pytest.approx(0.40 - (0.175 - k.PLACE_MARGIN - 0.10), abs=1e-12)
+    assert y == pytest.approx(0.0, abs=1e-12)
+    # placed with its grasp axis across the robot-to-target direction: yaw -90 deg (it was
+    # picked facing +y with yaw 0, so it keeps its orientation relative to the hands)
+    assert math.cos(target.yaw) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_object_positions_follow_the_hands_while_held() -> None:
+    plan = compile_plan(repo_scenario("package-transfer"))
+    (hold,) = plan.holds
+    times = np.array([0.0, hold.lift, 0.5 * (hold.lift + hold.release), hold.release])
+    ref = plan.object_reference(times)
+    trunk = plan.trunk_reference(times)
+    assert ref.held.tolist() == [False, True, True, False]
+    assert ref.position[0] == pytest.approx(trunk.position[0])  # r_e = 0 when not held
+    assert ref.position[1] == pytest.approx([0.0, 0.35, 0.545], abs=1e-9)  # still on the table
+    # carried: centre at the carry pose in the trunk frame
+    yaw = trunk.yaw[2]
+    fwd = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    expected = trunk.position[2] + k.CARRY_FORWARD * fwd + np.array([0, 0, k.CARRY_HEIGHT])
+    assert ref.position[2] == pytest.approx(expected, abs=1e-9)
+
+
+def test_throw_target_is_the_ballistic_landing_point() -> None:
+    plan = compile_plan(repo_scenario("throw"))
+    target = plan.object_target("ball")
+    assert target.kind == "throw"
+    (hold,) = plan.holds
+    st = plan.trunk_reference_at(hold.release)
+    u = np.array([1.5, 0.0, 1.0]) / math.hypot(1.5, 1.0)
+    release = (
+        st.position + np.array([k.CARRY_FORWARD, 0.0, k.CARRY_HEIGHT]) + k.THROW_RELEASE_OFFSET * u
+    )
+    expected = ballistic_landing(tuple(release), (1.5, 0.0, 1.0), 0.10)
+    assert target.position == pytest.approx(expected, abs=1e-12)
+    # check the ballistic formula itself: the flight ends at the rest height
+    t_flight = (expected[0] - release[0]) / 1.5
+    assert release[2] + 1.0 * t_flight - 0.5 * 9.81 * t_flight**2 == pytest.approx(0.10, abs=1e-12)
+
+
+def test_support_half_width_of_a_yawed_box() -> None:
+    box = ObjectSpec(shape="box", size=[0.4, 0.2, 0.1], mass=1.0, position=[0.0, 0.0, 0.0])
+    assert support_half_width(box, 0.0, 0.0, 1.0) == pytest.approx(0.1)
+    assert support_half_width(box, math.pi / 2, 0.0, 1.0) == pytest.approx(0.2)
+    c = math.sqrt(0.5)
+    assert support_half_width(box, 0.0, c, c) == pytest.approx(c * 0.3)
+
+
+SINGLE_HAND = """
+version: 1
+name: one-hand
+objects:
+  cup: {shape: sphere, size: [0.05], mass: 0.3, position: [0.35, -0.05, 0.55]}
+tasks:
+  - {action: pick, object: cup, hands: right, start: 0.0, duration: 1.0}
+  - {action: drop, object: cup, at: [0.35, -0.1, 0.6], start: 1.5, duration: 1.0}
+"""
+
+
+def test_single_hand_pick_uses_that_hand_only() -> None:
+    plan = compile_plan(scenario_from_text(SINGLE_HAND))
+    (hold,) = plan.holds
+    assert hold.hands == ("R",)
+    assert plan.manipulation.tracks[0].segments == ()
+    assert not plan.hand_active("L", 0.5)
+    assert plan.hand_active("R", 0.5)
+    assert plan.tasks[1].hands == "right"
+    assert plan.object_target("cup").position == (0.35, -0.1, 0.6)
+    assert plan.holding_hands(1.2) == (1,)
+
+
+@pytest.mark.parametrize(
+    ("tasks", "message"),
+    [
+        (
+            [{"action": "drop", "object": "cup", "at": [0.3, 0.0, 0.6], "start": 0, "duration": 1}],
+            "not held",
+        ),
+        (
+            [{"action": "pick", "object": "mug", "start": 0, "duration": 1}],
+            "unknown object 'mug'",
+        ),
+        (
+            [
+                {"action": "pick", "object": "cup", "start": 0, "duration": 1},
+                {"action": "drop", "object": "cup", "onto": "shelf", "start": 1, "duration": 1},
+            ],
+            "unknown fixture 'shelf'",
+        ),
+        (
+            [
+                {"action": "pick", "object": "cup", "start": 0, "duration": 1},
+                {"action": "pick", "object": "cup", "start": 1, "duration": 1},
+            ],
+            "already held",
+        ),
+        (
+            [
+                {"action": "pick", "object": "cup", "start": 0, "duration": 1},
+                {
+                    "action": "throw",
+                    "object": "cup",
+                    "velocity": [1, 0, 1],
+                    "start": 0.5,
+                    "duration": 1,
+                },
+            ],
+            "before its pick",
+        ),
+    ],
+)
+def test_compiler_refuses_impossible_manipulation(tasks, message) -> None:
+    # built past the loader (its semantic checks would reject these first) to exercise the
+    # compiler's own guards
+    base = scenario_from_text(SINGLE_HAND).model_dump()
+    base["tasks"] = tasks
+    scenario = type(scenario_from_text(SINGLE_HAND)).model_validate(base)
+    with pytest.raises(PlanError, match=message):
+        compile_plan(scenario)
