@@ -32,7 +32,7 @@ class Footholds:
     yaws: tuple[FloatArray, FloatArray]
     _liftoffs: tuple[FloatArray, FloatArray]
 
-    def at(self, times: FloatArray) -> FloatArray:
+    def at(self, times: npt.ArrayLike) -> FloatArray:
         """Footholds (n, 2, 3) at `times` (n,): the stance position, or during a swing its
         touchdown target."""
         times = np.asarray(times, dtype=float)

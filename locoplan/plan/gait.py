@@ -99,12 +99,14 @@ class ContactSchedule:
             return i
         return -1
 
-    def in_stance(self, foot: int | str, t: float | FloatArray) -> bool | BoolArray:
+    def in_stance(self, foot: int | str, t: float | npt.ArrayLike) -> bool | BoolArray:
         """Whether the foot is in stance at time t (scalar) or at each time of an array."""
         f = side_index(foot)
-        if np.ndim(t) == 0:
+        if isinstance(t, float | int):
             return self._swing_index(f, float(t)) < 0
         times = np.asarray(t, dtype=float)
+        if times.ndim == 0:
+            return self._swing_index(f, float(times)) < 0
         return ~self._swinging(f, times)
 
     def _swinging(self, f: int, times: FloatArray) -> BoolArray:
@@ -115,7 +117,7 @@ class ContactSchedule:
         ok = i >= 0
         return ok & (times < self.swing_end[f][np.maximum(i, 0)])
 
-    def flags(self, times: FloatArray) -> BoolArray:
+    def flags(self, times: npt.ArrayLike) -> BoolArray:
         """Stance flags (n, 2) bool: column 0 left foot, column 1 right (sigma_C1, sigma_C2)."""
         times = np.asarray(times, dtype=float)
         out = np.empty((times.shape[0], 2), dtype=bool)

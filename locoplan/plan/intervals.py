@@ -30,7 +30,7 @@ class Intervals:
         i = bisect.bisect_right(self._start_list, t) - 1
         return i if i >= 0 and t < self.end[i] else -1
 
-    def contains_array(self, times: FloatArray) -> BoolArray:
+    def contains_array(self, times: npt.ArrayLike) -> BoolArray:
         """Membership of every time of `times` (n,) -> (n,) bool."""
         times = np.asarray(times, dtype=float)
         if self.start.size == 0:

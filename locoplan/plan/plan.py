@@ -82,11 +82,11 @@ class Plan:
     events: tuple[PlanEvent, ...]
 
     # --- feet (sigma_C1, sigma_C2) ---------------------------------------------------------
-    def foot_stance(self, foot: int | str, t: float | FloatArray) -> bool | BoolArray:
+    def foot_stance(self, foot: int | str, t: float | npt.ArrayLike) -> bool | BoolArray:
         """Whether the foot is in stance at t (scalar -> bool, array (n,) -> (n,) bool)."""
         return self.contacts.in_stance(foot, t)
 
-    def contact_flags(self, times: FloatArray) -> BoolArray:
+    def contact_flags(self, times: npt.ArrayLike) -> BoolArray:
         """Foot stance flags (n, 2) bool at `times` (n,): columns left, right."""
         return self.contacts.flags(times)
 
@@ -120,7 +120,7 @@ class Plan:
         block = self.contacts.block_at(t)
         return self.gait_period if block is None else block.period
 
-    def footholds_at(self, times: FloatArray) -> FloatArray:
+    def footholds_at(self, times: npt.ArrayLike) -> FloatArray:
         """Nominal footholds (n, 2, 3) m world: the stance position, or the planned touchdown
         point during a swing."""
         return self.footholds.at(times)
@@ -130,7 +130,7 @@ class Plan:
         return self.footholds.foothold_at(foot, t)
 
     # --- trunk -----------------------------------------------------------------------------
-    def trunk_reference(self, times: FloatArray) -> TrunkReference:
+    def trunk_reference(self, times: npt.ArrayLike) -> TrunkReference:
         """Trunk reference at `times` (n,)."""
         return self.trunk.evaluate(times)
 
@@ -147,9 +147,9 @@ class Plan:
     def hand_targets_at(
         self,
         t: float,
-        base_position: FloatArray,
+        base_position: npt.ArrayLike,
         base_yaw: float,
-        base_velocity: FloatArray | None = None,
+        base_velocity: npt.ArrayLike | None = None,
         base_yaw_rate: float | None = None,
     ) -> HandTargets:
         """Hand targets at t for the given trunk pose (origin (3,) m and yaw rad, world).
@@ -180,7 +180,7 @@ class Plan:
         """Whether the hand is in contact with an object at t (sigma_H)."""
         return self.manipulation.contact_intervals[side_index(hand)].contains(t)
 
-    def hand_contact_flags(self, times: FloatArray) -> BoolArray:
+    def hand_contact_flags(self, times: npt.ArrayLike) -> BoolArray:
         """Hand contact flags (n, 2) bool at `times` (n,): columns left, right (sigma_H1,
         sigma_H2)."""
         times = np.asarray(times, dtype=float)
@@ -199,7 +199,7 @@ class Plan:
         """Every pick .. release of an object, in pick order."""
         return self.manipulation.holds
 
-    def object_held(self, times: FloatArray) -> BoolArray:
+    def object_held(self, times: npt.ArrayLike) -> BoolArray:
         """Whether some object's weight is on the robot at each time (n,) -> (n,) bool."""
         return self.manipulation.held_intervals.contains_array(times)
 
@@ -210,7 +210,7 @@ class Plan:
                 return hold.object
         return None
 
-    def held_mass(self, times: FloatArray) -> FloatArray:
+    def held_mass(self, times: npt.ArrayLike) -> FloatArray:
         """Total mass held at each time (n,) kg; F_ext = -mass g along z."""
         times = np.asarray(times, dtype=float)
         out = np.zeros(times.shape[0])
@@ -235,7 +235,7 @@ class Plan:
         """Where the object should end up (KeyError for an undeclared name)."""
         return self.manipulation.targets[name]
 
-    def object_reference(self, times: FloatArray) -> ObjectReference:
+    def object_reference(self, times: npt.ArrayLike) -> ObjectReference:
         """Planned load at `times` (n,) for the MPC: flags, mass and object centre along the
         planned trunk reference (see `object_positions`)."""
         times = np.asarray(times, dtype=float)
@@ -245,9 +245,9 @@ class Plan:
 
     def object_positions(
         self,
-        times: FloatArray,
-        base_positions: FloatArray | None = None,
-        base_yaws: FloatArray | None = None,
+        times: npt.ArrayLike,
+        base_positions: npt.ArrayLike | None = None,
+        base_yaws: npt.ArrayLike | None = None,
     ) -> FloatArray:
         """Centre (n, 3) m world of the held object at `times` (n,), from the hand targets for
         the given trunk poses (origins (n, 3) m, yaws (n,) rad; default: the planned

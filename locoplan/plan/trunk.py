@@ -83,7 +83,7 @@ class TrunkPath:
     _dyaw: FloatArray
     _t0_list: list[float]
 
-    def evaluate(self, times: FloatArray) -> TrunkReference:
+    def evaluate(self, times: npt.ArrayLike) -> TrunkReference:
         """Vectorised reference at `times` (n,) s."""
         t = np.asarray(times, dtype=float)
         i = np.searchsorted(self._t0, t, side="right") - 1
