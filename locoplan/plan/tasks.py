@@ -59,7 +59,8 @@ class PlannedTask:
 
     @property
     def kind(self) -> TaskKind:
-        """ "locomotion" (step, walk, turn), "manipulation" (pick, drop, throw) or "stand"."""
+        """Task kind: "locomotion" (step, walk, turn), "manipulation" (pick, drop, throw)
+        or "stand"."""
         if self.action in LOCOMOTION_ACTIONS:
             return "locomotion"
         if self.action in MANIPULATION_ACTIONS:
