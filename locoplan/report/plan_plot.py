@@ -85,7 +85,12 @@ def plot_plan(plan: Plan, path: str | Path, *, dpi: int = 120) -> Path:
 
     times = np.linspace(0.0, t_end, max(200, math.ceil(t_end * 100) + 1))
     ref = plan.trunk_reference(times)
-    ax_yaw.plot(times, np.degrees(ref.yaw), color="black", lw=1.5, label="yaw reference")
+    yaw_deg = np.degrees(ref.yaw)
+    ax_yaw.plot(times, yaw_deg, color="black", lw=1.5, label="yaw reference")
+    # at least +-10 deg of range, so that a constant yaw reads as constant
+    mid = 0.5 * (float(yaw_deg.max()) + float(yaw_deg.min()))
+    half = max(10.0, 0.55 * (float(yaw_deg.max()) - float(yaw_deg.min())))
+    ax_yaw.set_ylim(mid - half, mid + half)
     marks = {"grasp": ("tab:blue", ":"), "lift": ("tab:purple", "--"), "release": ("tab:red", "-.")}
     for event in plan.events:
         if event.kind in marks:
