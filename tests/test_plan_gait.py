@@ -32,6 +32,11 @@ def test_feet_never_both_swing_and_swings_cover_locomotion(path, strategy) -> No
                 if task.start - TIME_TOL <= a < task.end
             ]
             assert swings, (task, foot)
+            if foot == "L":  # the left foot lifts off as the task starts
+                assert swings[0][0] == pytest.approx(task.start, abs=TIME_TOL)
+            else:  # the right foot's last swing is in the task's last half cycle
+                block = next(b for b in plan.contacts.blocks if b.task_index == task.index)
+                assert swings[-1][0] == pytest.approx(task.end - block.period / 2, abs=TIME_TOL)
             assert all(b <= task.end - GAIT_MIN_DOUBLE_SUPPORT + TIME_TOL for _, b in swings)
     assert flags[~inside].all(), "a foot swings outside locomotion"
     # stance and swing intervals are complementary over [0, t_end]
