@@ -81,7 +81,7 @@ def validate_command(files: list[str] = _VALIDATE_FILES) -> None:
     """
     from locoplan.exceptions import ScenarioError
     from locoplan.scenario import load_scenario_file
-    from locoplan.scenario.yaml_source import MAX_BYTES
+    from locoplan.scenario.source import MAX_BYTES
 
     stdin_data: bytes | str | None = None
     all_ok = True

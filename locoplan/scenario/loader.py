@@ -3,8 +3,8 @@ issue with its file, 1-based line and column, and a message that says what is wr
 is allowed.
 
 Stages, each reporting all the issues it finds:
-1. reading (missing file, directory, non-UTF-8 bytes, too large) and YAML syntax (also
-   duplicate keys, tags, too deep or too large after aliases): `yaml_source`;
+1. reading (missing file, directory, non-UTF-8 bytes, too large): `source`; YAML syntax
+   (also duplicate keys, tags, too deep or too large after aliases): `yaml_source`;
 2. structure and types with the pydantic models (`model`), each error mapped back to its node;
 3. semantics (`semantics`): names, holding, overlaps, `end`, robot. This stage runs when the
    sections it reads (tasks, objects, fixtures, end, expect, robot) are valid, even if other
@@ -26,16 +26,15 @@ from locoplan.exceptions import ScenarioError, ScenarioIssue
 from locoplan.scenario.messages import LocatedIssue, show, validation_issues
 from locoplan.scenario.model import Scenario
 from locoplan.scenario.semantics import BUILTIN_ROBOTS, check_semantics, resolve_robot_path
-from locoplan.scenario.yaml_source import (
-    STDIN_LABEL,
-    YamlDocument,
-    parse_yaml,
-    read_source,
-)
+from locoplan.scenario.source import STDIN_LABEL, read_source
+from locoplan.scenario.yaml_source import YamlDocument, parse_yaml
 
 # Past this many issues the rest are summarised in one line: a file that bad needs fixing
 # from the top anyway, and a megabyte of garbage should not print a megabyte of errors.
 MAX_ISSUES = 100
+
+# Pydantic errors turned into messages at most (the rest are only counted).
+_MAX_TRANSLATED = 1000
 
 # Top-level sections the semantic checks read.
 _SEMANTIC_SECTIONS = ("tasks", "objects", "fixtures", "end", "expect", "robot")
@@ -114,10 +113,14 @@ def load_scenario_file(source: str | Path, text: str | bytes | None = None) -> L
 
     located: list[LocatedIssue] = []
     scenario: Scenario | None = None
+    untranslated = 0
     try:
         scenario = Scenario.model_validate(doc.data)
     except ValidationError as exc:
-        located += validation_issues(exc.errors(include_url=False))
+        errors = exc.errors(include_url=False)
+        # Messages cost more than positions; a file with thousands of errors is cut anyway.
+        located += validation_issues(errors[:_MAX_TRANSLATED])
+        untranslated = max(0, len(errors) - _MAX_TRANSLATED)
     checked = scenario if scenario is not None else _semantic_view(doc)
     if checked is not None:
         base_dir = src.path.parent if src.path is not None else None
@@ -125,7 +128,7 @@ def load_scenario_file(source: str | Path, text: str | bytes | None = None) -> L
             checked, base_dir=base_dir, task_label=lambda i: _task_label(doc, i)
         )
     if located:
-        raise ScenarioError(_capped([place(issue) for issue in located]))
+        raise ScenarioError(_capped([place(issue) for issue in located], untranslated))
     assert scenario is not None  # no issue means validation succeeded
     return LoadedScenario(scenario, src.path, src.text)
 
@@ -146,15 +149,17 @@ def _task_label(doc: YamlDocument, index: int) -> str:
     return f"task {index + 1} at line {line}"
 
 
-def _capped(issues: list[ScenarioIssue]) -> list[ScenarioIssue]:
-    if len(issues) <= MAX_ISSUES:
+def _capped(issues: list[ScenarioIssue], untranslated: int) -> list[ScenarioIssue]:
+    """The first MAX_ISSUES issues by position, and a line counting the others."""
+    if len(issues) <= MAX_ISSUES and not untranslated:
         return issues
     ordered = sorted(issues, key=lambda i: (i.line, i.column))
-    rest = ordered[MAX_ISSUES]
+    rest = ordered[min(MAX_ISSUES, len(ordered) - 1)]
+    hidden = len(ordered) - MAX_ISSUES + untranslated
     note = ScenarioIssue(
         rest.path,
         rest.line,
         rest.column,
-        f"... and {len(ordered) - MAX_ISSUES} more issues from here on (not shown)",
+        f"... and {hidden} more issues from here on (not shown)",
     )
     return [*ordered[:MAX_ISSUES], note]

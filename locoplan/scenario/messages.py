@@ -13,17 +13,14 @@ from __future__ import annotations
 import datetime
 import difflib
 import re
-import types
-import typing
 from collections.abc import Hashable, Iterable
 from dataclasses import dataclass
-from typing import Any, Literal, get_args, get_origin
+from typing import Any
 
-from pydantic import BaseModel
-from pydantic.fields import FieldInfo
 from pydantic_core import ErrorDetails
 
-from locoplan.scenario.model import ACTIONS, FieldValueError, Scenario
+from locoplan.scenario.introspect import allowed_keys, fixed_length, required_keys
+from locoplan.scenario.model import ACTIONS, FieldValueError
 
 Loc = tuple[Hashable, ...]
 
@@ -77,7 +74,7 @@ def show(value: Any) -> str:
         return repr(value)
     if isinstance(value, str):
         return repr(value) if len(value) <= 60 else repr(value[:57]) + "..."
-    if isinstance(value, list):
+    if isinstance(value, list | tuple):
         return f"a list of {len(value)} item{'s' if len(value) != 1 else ''}"
     if isinstance(value, dict):
         return "a mapping"
@@ -120,13 +117,17 @@ def _translate(error: ErrorDetails) -> LocatedIssue:
 
     if kind == "union_tag_invalid" and isinstance(value, dict):
         got = value.get("action")
-        message = f"unknown action {show(got)}; allowed: {join(ACTIONS)}{suggest(got, ACTIONS)}"
+        if isinstance(got, str):
+            message = f"unknown action {show(got)}; allowed: {join(ACTIONS)}"
+            message += suggest(got, ACTIONS)
+        else:
+            message = f"expected an action name, got {show(got)}; allowed: {join(ACTIONS)}"
         return LocatedIssue((*loc, "action"), message)
     if kind == "union_tag_not_found":
         return LocatedIssue(loc, f"task has no 'action'; allowed actions: {join(ACTIONS)}")
     if kind == "extra_forbidden":
         parent = loc[:-1]
-        allowed = _allowed_keys(parent, action)
+        allowed = allowed_keys(parent, action)
         key = loc[-1] if loc else None
         message = f"unknown key {show(key)} {_where(parent, action)}"
         if allowed:
@@ -134,7 +135,7 @@ def _translate(error: ErrorDetails) -> LocatedIssue:
         return LocatedIssue((*loc, "[key]"), message)
     if kind == "missing":
         parent = loc[:-1]
-        required = _required_keys(parent, action)
+        required = required_keys(parent, action)
         message = f"missing key {show(field)} {_where(parent, action)}"
         if required:
             message += f"; required: {join(required)}"
@@ -173,7 +174,7 @@ def _value_message(
     if kind == "bool_type":
         return f"expected true or false, got {got}"
     if kind == "list_type":
-        length = _fixed_length(loc, action)
+        length = fixed_length(loc, action)
         what = f"a list of {length} numbers" if length else "a list"
         return f"expected {what}, got {got}"
     if kind in ("dict_type", "model_type", "model_attributes_type"):
@@ -206,7 +207,7 @@ def _length_message(
     kind: str, loc: Loc, field: str, action: str | None, ctx: dict[str, Any]
 ) -> str:
     actual = ctx.get("actual_length")
-    fixed = _fixed_length(loc, action)
+    fixed = fixed_length(loc, action)
     if fixed:
         return f"{field} needs {fixed} values, got {actual}"
     if field == "tasks":
@@ -248,86 +249,3 @@ def _where(parent: Loc, action: str | None) -> str:
     if len(parent) == 2 and parent[0] in ("objects", "fixtures"):
         return f"in {str(parent[0])[:-1]} {show(parent[1])}"
     return f"in {show(parent[-1])}"
-
-
-# --- model introspection: which model and field a loc points into ---------------------------
-
-
-def _unwrap(tp: Any, action: str | None) -> Any:
-    while True:
-        origin = get_origin(tp)
-        if origin is typing.Annotated:
-            tp = get_args(tp)[0]
-        elif origin in (typing.Union, types.UnionType):
-            members = [a for a in get_args(tp) if a is not type(None)]
-            if len(members) == 1:
-                tp = members[0]
-                continue
-            for member in members:
-                if _is_model(member) and _action_of(member) == action:
-                    return member
-            return None
-        else:
-            return tp
-
-
-def _is_model(tp: Any) -> bool:
-    return isinstance(tp, type) and issubclass(tp, BaseModel)
-
-
-def _action_of(model: type[BaseModel]) -> str | None:
-    info = model.model_fields.get("action")
-    if info is None or get_origin(info.annotation) is not Literal:
-        return None
-    return str(get_args(info.annotation)[0])
-
-
-def _resolve(loc: Loc, action: str | None) -> tuple[Any, FieldInfo | None]:
-    """The type at `loc` (a model class, list type, ...) and the model field it belongs to."""
-    tp: Any = Scenario
-    info: FieldInfo | None = None
-    for part in loc:
-        tp = _unwrap(tp, action)
-        if _is_model(tp):
-            info = tp.model_fields.get(part) if isinstance(part, str) else None
-            if info is None:
-                return None, None
-            tp = info.annotation
-        elif get_origin(tp) is list and isinstance(part, int):
-            tp, info = get_args(tp)[0], None
-        elif get_origin(tp) is dict:
-            tp, info = get_args(tp)[1], None
-        else:
-            return None, None
-    return _unwrap(tp, action), info
-
-
-def _allowed_keys(parent: Loc, action: str | None) -> list[str]:
-    model, _ = _resolve(parent, action)
-    if not _is_model(model):
-        return []
-    names = list(model.model_fields)
-    return sorted(names, key=lambda n: n != "action")  # stable: 'action' first
-
-
-def _required_keys(parent: Loc, action: str | None) -> list[str]:
-    model, _ = _resolve(parent, action)
-    if not _is_model(model):
-        return []
-    names = [n for n, f in model.model_fields.items() if f.is_required()]
-    return sorted(names, key=lambda n: n != "action")
-
-
-def _fixed_length(loc: Loc, action: str | None) -> int | None:
-    """N when the field at `loc` is a list of exactly N values (a vector), else None."""
-    _, info = _resolve(loc, action)
-    if info is None:
-        return None
-    low = high = None
-    metadata = list(info.metadata)
-    for arg in get_args(info.annotation):  # `Annotated[list, Field(...)] | None`
-        metadata.extend(getattr(arg, "__metadata__", ()))
-    for item in metadata:
-        low = getattr(item, "min_length", low)
-        high = getattr(item, "max_length", high)
-    return low if low is not None and low == high else None

@@ -274,7 +274,7 @@ def _check_robot(scenario: Scenario, base_dir: Path | None) -> list[LocatedIssue
         return [
             LocatedIssue(
                 ("robot",),
-                f"robot file {show(robot)} not found (looked for {path}); "
+                f"robot file {show(robot)} not found (looked for {show(str(path))}); "
                 "paths are relative to the task script",
             )
         ]
