@@ -1,0 +1,69 @@
+"""Line-foot contact wrench: parametrisation and its constraints (shared by MPC and WBC).
+
+A stance foot's wrench is parametrised as w5 = [Fx', Fy', Fz, My', Mz'] in the foot's yaw
+frame (x' along the foot, z up), with no moment about the foot's long axis (the paper's
+selection L = [0 0; 1 0; 0 1]). In the world: F = R_z(psi) [Fx', Fy', Fz],
+M = R_z(psi) [0, My', Mz'], the moment taken about the sole point under the ankle.
+
+Centre of pressure: a vertical force Fz acting at x_cop along the foot gives the moment
+My' = -x_cop Fz about the sole point, so x_cop in [-heel, toe] is -toe Fz <= My' <= heel Fz.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class ContactLimits:
+    """Friction coefficient, vertical force bounds (N), foot lengths ahead/behind the ankle (m),
+    torsional friction coefficient (m; |Mz'| <= mu_torsion Fz)."""
+
+    mu: float = 0.5
+    f_min: float = 10.0
+    f_max: float = 250.0
+    toe: float = 0.09
+    heel: float = 0.06
+    mu_torsion: float = 0.02
+
+    def __post_init__(self) -> None:
+        if not (self.mu > 0 and 0 <= self.f_min <= self.f_max and self.toe > 0 and self.heel > 0):
+            raise ValueError(f"inconsistent contact limits: {self}")
+
+
+def wrench_rows(limits: ContactLimits) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Rows (9, 5) with bounds lo <= C w5 <= hi: friction pyramid (4), f_min <= Fz <= f_max
+    (1), centre of pressure (2), torsional friction (2). Returns (C, lo, hi)."""
+    mu, tz = limits.mu, limits.mu_torsion
+    inf = np.inf
+    C = np.array(
+        [
+            [1.0, 0.0, -mu, 0.0, 0.0],  # Fx' <= mu Fz
+            [-1.0, 0.0, -mu, 0.0, 0.0],  # -Fx' <= mu Fz
+            [0.0, 1.0, -mu, 0.0, 0.0],
+            [0.0, -1.0, -mu, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0, 0.0],  # f_min <= Fz <= f_max
+            [0.0, 0.0, limits.toe, 1.0, 0.0],  # My' >= -toe Fz
+            [0.0, 0.0, -limits.heel, 1.0, 0.0],  # My' <= heel Fz
+            [0.0, 0.0, -tz, 0.0, 1.0],  # Mz' <= mu_t Fz
+            [0.0, 0.0, tz, 0.0, 1.0],  # Mz' >= -mu_t Fz
+        ]
+    )
+    lo = np.array([-inf, -inf, -inf, -inf, limits.f_min, 0.0, -inf, -inf, 0.0])
+    hi = np.array([0.0, 0.0, 0.0, 0.0, limits.f_max, inf, 0.0, 0.0, inf])
+    return C, lo, hi
+
+
+def wrench5_to_world(yaw: float) -> FloatArray:
+    """Matrix (6, 5) mapping w5 (foot yaw frame) to the world wrench [F; M] at the sole."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    Rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    T = np.zeros((6, 5))
+    T[0:3, 0:3] = Rz
+    T[3:6, 3:5] = Rz[:, 1:3]
+    return T

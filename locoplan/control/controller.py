@@ -1,0 +1,577 @@
+"""The loco-manipulation controller: multi-contact MPC + swing/hand PD + whole-body mapping.
+
+One `step(state)` per control tick (1 kHz). Every `mpc_period` (10 ms) the MPC is re-solved
+over its horizon (20 x 0.03 s) with the compiled plan's contact schedule, trunk reference,
+planned footholds and held-object force inside the horizon. In between, the latest MPC
+wrenches are applied (zeroed for a foot that has since lifted off).
+
+Why the MPC is re-solved every 10 ms rather than every 30 ms: with the true composite inertia
+(pitch about 0.6 kg m^2 rather than the trunk's 0.15) a 30 ms update made pitch oscillate at
+the update rate on this robot (shared/controller-notes.md); 10 ms with the horizon still
+20 x 0.03 s keeps the model honest and the loop stable.
+
+Torque mapping, selectable:
+- "wbc" (default): Kim et al.'s prioritised task accelerations (contacts, trunk orientation,
+  trunk position, swing feet and hands) followed by the paper's WBC QP (locoplan.control.wbc).
+- "jacobian": the plain baseline, tau = h - J_c' W for stance legs and tau = h + J' F_PD for
+  swing legs and arms.
+
+The controller never imports mujoco: it sees pinocchio-convention states only.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from locoplan.control.contact import ContactLimits
+from locoplan.control.mpc import MpcInput, MpcSettings, MpcSolution, MultiContactMpc
+from locoplan.control.swing import min_jerk, swing_point
+from locoplan.control.wbc import (
+    AccelerationTask,
+    StanceContact,
+    WbcOutput,
+    WbcSettings,
+    WholeBodyQp,
+    prioritized_acceleration,
+)
+from locoplan.exceptions import SolverFailure
+from locoplan.plan import Plan
+from locoplan.robot.description import RobotDescription
+from locoplan.robot.pinocchio_model import PinocchioRobot
+
+FloatArray = npt.NDArray[np.float64]
+
+GRAVITY = 9.81
+FEET = ("L", "R")
+
+
+def rot_z(yaw: float) -> FloatArray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def wrap_angle(a: float) -> float:
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def quat_xyzw_to_matrix(qx: float, qy: float, qz: float, qw: float) -> FloatArray:
+    return np.array(
+        [
+            [1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
+            [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
+            [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)],
+        ]
+    )
+
+
+def rpy_from_matrix(R: FloatArray) -> tuple[float, float, float]:
+    """Roll, pitch, yaw (ZYX Euler, rad) of a rotation matrix."""
+    yaw = math.atan2(R[1, 0], R[0, 0])
+    pitch = -math.asin(max(-1.0, min(1.0, R[2, 0])))
+    roll = math.atan2(R[2, 1], R[2, 2])
+    return roll, pitch, yaw
+
+
+def rotation_error(R_des: FloatArray, R: FloatArray) -> FloatArray:
+    """World-frame rotation vector e with exp([e]x) R = R_des (log map of R_des R')."""
+    E = R_des @ R.T
+    cos_t = max(-1.0, min(1.0, (np.trace(E) - 1.0) / 2.0))
+    theta = math.acos(cos_t)
+    w = np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
+    if theta < 1e-6:
+        return 0.5 * w
+    return theta / (2.0 * math.sin(theta)) * w
+
+
+@dataclass(frozen=True, slots=True)
+class ControllerSettings:
+    """Gains and rates. Trunk gains are the paper's Kp = diag(200, 200, 500, 1000, 1500,
+    1000), Kd = diag(20, 20, 30, 30, 30, 30) on x_c = [p_c; Theta] (position first, as the
+    paper defines x_c^des = [p_c^des; Theta^des])."""
+
+    mpc_period: float = 0.01
+    mapping: Literal["wbc", "jacobian"] = "wbc"
+    model: Literal["external-force", "combined"] = "external-force"
+    qp_backend: str = "proxsuite"
+    mpc: MpcSettings = field(default_factory=MpcSettings)
+    limits: ContactLimits = field(default_factory=ContactLimits)
+    trunk_kp_pos: tuple[float, float, float] = (200.0, 200.0, 500.0)
+    trunk_kd_pos: tuple[float, float, float] = (20.0, 20.0, 30.0)
+    trunk_kp_rot: tuple[float, float, float] = (1000.0, 1500.0, 1000.0)
+    trunk_kd_rot: tuple[float, float, float] = (30.0, 30.0, 30.0)
+    # Swing foot: task-space acceleration gains (1/s^2, 1/s) for the WBC and Cartesian force
+    # gains (N/m, N s/m) for the jacobian mapping (controller-notes: Kp 1000 / Kd 30 best).
+    swing_kp_acc: float = 1500.0
+    swing_kd_acc: float = 60.0
+    swing_kp_force: float = 1000.0
+    swing_kd_force: float = 30.0
+    swing_kp_rot: float = 400.0
+    swing_kd_rot: float = 30.0
+    swing_height: float = 0.08
+    raibert_gain: float = 0.05
+    hand_kp_acc: float = 400.0
+    hand_kd_acc: float = 40.0
+    hand_kp_force: float = 300.0
+    hand_kd_force: float = 20.0
+
+
+@dataclass(frozen=True, slots=True)
+class ControlOutput:
+    """Everything one tick decided: torques (16,) before the last-guard clip, the clipped
+    torques, how many joints were clipped, the applied contact wrenches (2, 6) world
+    [F; M] at the soles (zero for swing feet), the stance flags, the swing and hand targets,
+    and the latest MPC / WBC results (None when not run this tick)."""
+
+    tau: FloatArray
+    tau_clipped: FloatArray
+    n_clipped: int
+    wrench_world: FloatArray
+    stance: tuple[bool, bool]
+    foot_targets: FloatArray
+    hand_targets: FloatArray
+    mpc: MpcSolution | None
+    mpc_time_s: float
+    wbc: WbcOutput | None
+    wbc_time_s: float
+    dynamics_time_s: float
+
+
+@dataclass(slots=True)
+class _SwingState:
+    t_liftoff: float = -1.0
+    p_start: FloatArray = field(default_factory=lambda: np.zeros(3))
+    yaw_start: float = 0.0
+
+
+class LocoManipulationController:
+    """Stateful controller (MPC solver, latest MPC solution, swing start points)."""
+
+    def __init__(
+        self,
+        robot: PinocchioRobot,
+        desc: RobotDescription,
+        plan: Plan,
+        settings: ControllerSettings | None = None,
+    ) -> None:
+        self.robot = robot
+        self.desc = desc
+        self.plan = plan
+        self.s = settings or ControllerSettings()
+        self.mpc = MultiContactMpc(self.s.mpc)
+        self.wbc = WholeBodyQp(
+            desc.torque_limits, WbcSettings(limits=self.s.limits, backend=self.s.qp_backend)
+        )
+        self.tau_limits = np.asarray(desc.torque_limits, dtype=float)
+        self._last_mpc: MpcSolution | None = None
+        self._last_mpc_t = -math.inf
+        self._last_contact = (True, True)
+        self._swing = [_SwingState(), _SwingState()]
+        # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
+        self._cols_leg = [np.arange(6, 11), np.arange(11, 16)]
+        self._cols_arm = [np.arange(16, 19), np.arange(19, 22)]
+        self._nominal_geometry()
+
+    # -- set-up --------------------------------------------------------------------------------
+    def _nominal_geometry(self) -> None:
+        """CoM offset and foot offsets in the trunk's yaw frame at the nominal pose, and the
+        MPC's body inertia (composite, about the CoM, trunk frame)."""
+        q0 = np.zeros(23)
+        q0[2] = self.desc.base_height_nominal
+        q0[6] = 1.0
+        q0[7:] = self.desc.q_joints_nominal
+        r = self.robot
+        r.update(q0, np.zeros(22))
+        base = q0[:3]
+        self.com_offset = r.com_position - base  # trunk frame == world at yaw 0
+        self.foot_offsets = np.array([r.frame_position(f) - base for f in self.desc.foot_frames])
+        self.hand_offsets = np.array([r.frame_position(h) - base for h in self.desc.hand_frames])
+        self.inertia_body = np.asarray(r.composite_inertia_world(), dtype=float)
+        self.mass = float(r.total_mass)
+        # Foot placement relative to the CoM (x: support centre under the CoM).
+        self.foot_offset_from_com = self.foot_offsets - self.com_offset
+        self.com_height = float(r.com_position[2])
+
+    # -- helpers -------------------------------------------------------------------------------
+    def _com_reference(
+        self, times: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """CoM position (n,3), velocity (n,3), yaw (n,), yaw rate (n,) from the plan, and the
+        trunk-origin position (n,3) it came from."""
+        ref = self.plan.trunk_reference(times)
+        yaw = np.asarray(ref.yaw, dtype=float)
+        c, s = np.cos(yaw), np.sin(yaw)
+        off = self.com_offset
+        p = np.array(ref.position, dtype=float)
+        p[:, 0] += c * off[0] - s * off[1]
+        p[:, 1] += s * off[0] + c * off[1]
+        p[:, 2] = self.com_height + (p[:, 2] - self.desc.base_height_nominal)
+        v = np.array(ref.velocity, dtype=float)
+        w = np.asarray(ref.yaw_rate, dtype=float)
+        # d/dt of the rotated offset.
+        v[:, 0] += -w * (s * off[0] + c * off[1])
+        v[:, 1] += w * (c * off[0] - s * off[1])
+        return p, v, yaw, w, np.asarray(ref.position, dtype=float)
+
+    def _foothold(
+        self, k: int, t: float, t_td: float, p_c: FloatArray, v_c: FloatArray
+    ) -> tuple[FloatArray, float]:
+        """Planned touchdown point (3,) and yaw of foot k for a touchdown at `t_td` (paper's
+        Raibert rule on top of the reference's planned displacement)."""
+        p_ref, v_ref, yaw_ref, _, _ = self._com_reference(np.array([t, t_td]))
+        yaw_td = float(yaw_ref[1])
+        off = rot_z(yaw_td) @ self.foot_offset_from_com[k]
+        stance_time = self.plan.gait_period_at(t_td) / 2.0
+        p = p_c + (p_ref[1] - p_ref[0]) + off
+        p[:2] += v_ref[1, :2] * stance_time / 2.0 + self.s.raibert_gain * (v_c[:2] - v_ref[0, :2])
+        p[2] = 0.0
+        return p, yaw_td
+
+    # -- MPC -----------------------------------------------------------------------------------
+    def _run_mpc(
+        self,
+        t: float,
+        x0: FloatArray,
+        p_c: FloatArray,
+        v_c: FloatArray,
+        p_feet_now: FloatArray,
+        yaw_feet_now: FloatArray,
+    ) -> MpcSolution:
+        N = self.s.mpc.horizon
+        dt = self.s.mpc.dt
+        times = t + dt * np.arange(1, N + 1, dtype=np.float64)
+        p_ref, v_ref, yaw_ref, w_ref, p_base_ref = self._com_reference(times)
+        x_ref = np.zeros((N, 15))
+        x_ref[:, 2] = yaw_ref
+        x_ref[:, 3:6] = p_ref
+        x_ref[:, 8] = w_ref
+        x_ref[:, 9:12] = v_ref
+        x_ref[:, 14] = -GRAVITY
+        contact = np.asarray(self.plan.contact_flags(times), dtype=bool)
+        p_feet = np.zeros((N, 2, 3))
+        foot_yaw = np.zeros((N, 2))
+        for k in range(2):
+            cache: dict[float, tuple[FloatArray, float]] = {}
+            for i in range(N):
+                t_td = self.plan.stance_start(k, float(times[i]))
+                if t_td is None or t_td <= t + 1e-9:
+                    p_feet[i, k] = p_feet_now[k]
+                    foot_yaw[i, k] = yaw_feet_now[k]
+                else:
+                    if t_td not in cache:
+                        cache[t_td] = self._foothold(k, t, t_td, p_c, v_c)
+                    p_feet[i, k], foot_yaw[i, k] = cache[t_td]
+        held = np.asarray(self.plan.object_held(times), dtype=bool)
+        obj_mass = np.asarray(self.plan.held_mass(times), dtype=float)
+        p_obj = np.asarray(self.plan.object_positions(times, p_base_ref, yaw_ref), dtype=float)
+        inp = MpcInput(
+            x0=x0,
+            x_ref=x_ref,
+            contact=contact,
+            p_feet=p_feet,
+            foot_yaw=foot_yaw,
+            yaw_lin=yaw_ref,
+            mass=self.mass,
+            t=t,
+            inertia_body=self.inertia_body,
+            object_held=held,
+            object_mass=obj_mass,
+            p_object=p_obj,
+            model=self.s.model,
+        )
+        return self.mpc.update(inp)
+
+    # -- the tick ------------------------------------------------------------------------------
+    def step(self, t: float, q: FloatArray, v: FloatArray) -> ControlOutput:
+        """Torques (16,) for state (q (23,), v (22,), pinocchio convention) at time t (s)."""
+        t_dyn = time.perf_counter()
+        r = self.robot
+        r.update(q, v)
+        R = quat_xyzw_to_matrix(q[3], q[4], q[5], q[6])
+        roll, pitch, yaw = rpy_from_matrix(R)
+        omega_w = R @ v[3:6]
+        p_c = np.asarray(r.com_position, dtype=float)
+        v_c = np.asarray(r.com_velocity, dtype=float)
+        p_feet = np.array([r.frame_position(f) for f in self.desc.foot_frames])
+        R_feet = [r.frame_rotation(f) for f in self.desc.foot_frames]
+        yaw_feet = np.array([math.atan2(Rf[1, 0], Rf[0, 0]) for Rf in R_feet])
+        J_feet = [r.frame_jacobian(f) for f in self.desc.foot_frames]
+        dJv_feet = [r.frame_jdot_v(f) for f in self.desc.foot_frames]
+        v_feet = [J @ v for J in J_feet]
+        dyn_time = time.perf_counter() - t_dyn
+
+        stance = tuple(bool(self.plan.foot_stance(k, t)) for k in range(2))
+        # Swing bookkeeping: remember where each swing started.
+        for k in range(2):
+            if not stance[k] and self._last_contact[k]:
+                sw = self._swing[k]
+                sw.t_liftoff = t
+                sw.p_start = p_feet[k].copy()
+                sw.yaw_start = float(yaw_feet[k])
+        contact_changed = stance != self._last_contact
+        self._last_contact = (stance[0], stance[1])
+
+        # MPC.
+        mpc_sol: MpcSolution | None = None
+        mpc_time = 0.0
+        if contact_changed or t - self._last_mpc_t >= self.s.mpc_period - 1e-9:
+            yaw_ref_now = float(self.plan.trunk_reference_at(t).yaw)
+            yaw_meas = yaw_ref_now + wrap_angle(yaw - yaw_ref_now)
+            x0 = np.concatenate([[roll, pitch, yaw_meas], p_c, omega_w, v_c, [0, 0, -GRAVITY]])
+            t_m = time.perf_counter()
+            mpc_sol = self._run_mpc(t, x0, p_c, v_c, p_feet, yaw_feet)
+            mpc_time = time.perf_counter() - t_m
+            if not mpc_sol.ok and self._last_mpc is None:
+                raise SolverFailure(t, "mpc", self.s.qp_backend, mpc_sol.status)
+            self._last_mpc = mpc_sol
+            self._last_mpc_t = t
+        assert self._last_mpc is not None
+        forces = np.array(self._last_mpc.forces_world, dtype=float)
+        moments = np.array(self._last_mpc.moments_world, dtype=float)
+        wrench = np.zeros((2, 6))
+        for k in range(2):
+            if stance[k]:
+                wrench[k, :3] = forces[k]
+                wrench[k, 3:] = moments[k]
+
+        # Swing-foot targets.
+        foot_targets = np.full((2, 3), np.nan)
+        swing_acc: list[tuple[FloatArray, FloatArray, FloatArray, float]] = []
+        for k in range(2):
+            if stance[k]:
+                continue
+            ph = self.plan.swing_phase(k, t)
+            if ph is None:
+                continue
+            sw = self._swing[k]
+            p_td, yaw_td = self._foothold(k, t, ph.touchdown, p_c, v_c)
+            duration = ph.touchdown - ph.liftoff
+            phase = min(1.0, max(0.0, (t - ph.liftoff) / duration))
+            pt = swing_point(sw.p_start, p_td, self.s.swing_height, phase, duration)
+            sb, _, _ = min_jerk(phase)
+            yaw_des = sw.yaw_start + sb * wrap_angle(yaw_td - sw.yaw_start)
+            foot_targets[k] = pt.position
+            swing_acc.append((pt.position, pt.velocity, pt.acceleration, yaw_des))
+        # Hand targets.
+        base_pos = q[:3]
+        targets = self.plan.hand_targets_at(t, base_pos, yaw, R @ v[:3], float(omega_w[2]))
+        hand_targets = np.asarray(targets.positions, dtype=float)
+        v_hand_des = np.asarray(targets.velocities, dtype=float)
+        J_hands = [r.frame_jacobian(h) for h in self.desc.hand_frames]
+        p_hands = np.array([r.frame_position(h) for h in self.desc.hand_frames])
+        v_hands = [J[:3] @ v for J in J_hands]
+        tau_ext = self._object_generalized_force(t, J_hands)
+
+        t_w = time.perf_counter()
+        wbc_out: WbcOutput | None = None
+        if self.s.mapping == "jacobian":
+            tau = self._jacobian_mapping(
+                stance,
+                wrench,
+                J_feet,
+                v_feet,
+                p_feet,
+                R_feet,
+                swing_acc,
+                J_hands,
+                p_hands,
+                v_hands,
+                hand_targets,
+                v_hand_des,
+                tau_ext,
+            )
+        else:
+            tasks = self._tasks(
+                t,
+                q,
+                v,
+                R,
+                omega_w,
+                stance,
+                J_feet,
+                dJv_feet,
+                v_feet,
+                p_feet,
+                R_feet,
+                swing_acc,
+                J_hands,
+                p_hands,
+                v_hands,
+                hand_targets,
+                v_hand_des,
+            )
+            qdd_cmd = prioritized_acceleration(tasks, 22)
+            contacts = []
+            for k in range(2):
+                if stance[k]:
+                    Rz = rot_z(float(yaw_feet[k]))
+                    f_loc = Rz.T @ wrench[k, :3]
+                    m_loc = Rz.T @ wrench[k, 3:]
+                    w5 = np.array([f_loc[0], f_loc[1], f_loc[2], m_loc[1], m_loc[2]])
+                    contacts.append(StanceContact(J_feet[k], float(yaw_feet[k]), w5))
+            wbc_out = self.wbc.solve(r.M, r.h, qdd_cmd, contacts, tau_ext)
+            tau = wbc_out.tau
+        wbc_time = time.perf_counter() - t_w
+        tau_clipped = np.clip(tau, -self.tau_limits, self.tau_limits)
+        n_clipped = int(np.count_nonzero(np.abs(tau) > self.tau_limits))
+        return ControlOutput(
+            tau=tau,
+            tau_clipped=tau_clipped,
+            n_clipped=n_clipped,
+            wrench_world=wrench,
+            stance=(stance[0], stance[1]),
+            foot_targets=foot_targets,
+            hand_targets=hand_targets,
+            mpc=mpc_sol,
+            mpc_time_s=mpc_time,
+            wbc=wbc_out,
+            wbc_time_s=wbc_time,
+            dynamics_time_s=dyn_time,
+        )
+
+    # -- pieces ---------------------------------------------------------------------------------
+    def _object_generalized_force(self, t: float, J_hands: list[FloatArray]) -> FloatArray:
+        """J_e' F_ext: the held object's weight, shared by the holding hands (nv,)."""
+        tau_ext = np.zeros(22)
+        mass = self.plan.held_mass_at(t)
+        if mass <= 0.0:
+            return tau_ext
+        hands = self.plan.holding_hands(t)
+        if not hands:
+            return tau_ext
+        f = np.array([0.0, 0.0, -mass * GRAVITY / len(hands)])
+        for k in hands:
+            tau_ext += J_hands[k][:3].T @ f
+        return tau_ext
+
+    def _tasks(
+        self,
+        t: float,
+        q: FloatArray,
+        v: FloatArray,
+        R: FloatArray,
+        omega_w: FloatArray,
+        stance: tuple[bool, ...],
+        J_feet: list[FloatArray],
+        dJv_feet: list[FloatArray],
+        v_feet: list[FloatArray],
+        p_feet: FloatArray,
+        R_feet: list[FloatArray],
+        swing: list[tuple[FloatArray, FloatArray, FloatArray, float]],
+        J_hands: list[FloatArray],
+        p_hands: FloatArray,
+        v_hands: list[FloatArray],
+        hand_des: FloatArray,
+        hand_vel_des: FloatArray,
+    ) -> list[AccelerationTask]:
+        r = self.robot
+        s = self.s
+        tasks: list[AccelerationTask] = []
+        # 0: stance contacts, 5 rows per foot (no constraint on roll about the foot's x axis).
+        rows_J, rows_b = [], []
+        for k in range(2):
+            if not stance[k]:
+                continue
+            Rf = R_feet[k]
+            Jang = Rf.T @ J_feet[k][3:]
+            aang = Rf.T @ dJv_feet[k][3:]
+            rows_J.append(np.vstack([J_feet[k][:3], Jang[1:]]))
+            rows_b.append(np.concatenate([dJv_feet[k][:3], aang[1:]]))
+        if rows_J:
+            Jc = np.vstack(rows_J)
+            tasks.append(AccelerationTask(Jc, np.concatenate(rows_b), np.zeros(Jc.shape[0])))
+        # 1-2: trunk orientation and position (base frame = root joint frame).
+        ref = self.plan.trunk_reference_at(t)
+        J_base = r.frame_jacobian(self.desc.trunk_body)
+        dJv_base = r.frame_jdot_v(self.desc.trunk_body)
+        R_des = rot_z(float(ref.yaw))
+        e_rot = rotation_error(R_des, R)
+        w_des = np.array([0.0, 0.0, float(ref.yaw_rate)])
+        acc_rot = np.asarray(s.trunk_kp_rot) * e_rot + np.asarray(s.trunk_kd_rot) * (
+            w_des - omega_w
+        )
+        tasks.append(AccelerationTask(J_base[3:], dJv_base[3:], acc_rot))
+        p_des = np.asarray(ref.position, dtype=float)
+        v_des = np.asarray(ref.velocity, dtype=float)
+        v_base = R @ v[:3]
+        acc_pos = np.asarray(s.trunk_kp_pos) * (p_des - q[:3]) + np.asarray(s.trunk_kd_pos) * (
+            v_des - v_base
+        )
+        tasks.append(AccelerationTask(J_base[:3], dJv_base[:3], acc_pos))
+        # 3: swing feet (position + pitch/yaw orientation) and hands.
+        rows_J, rows_b, rows_a = [], [], []
+        i_sw = 0
+        for k in range(2):
+            if stance[k] or i_sw >= len(swing):
+                continue
+            p_d, v_d, a_d, yaw_d = swing[i_sw]
+            i_sw += 1
+            a_lin = (
+                a_d + s.swing_kp_acc * (p_d - p_feet[k]) + s.swing_kd_acc * (v_d - v_feet[k][:3])
+            )
+            Rf = R_feet[k]
+            e = Rf.T @ rotation_error(rot_z(yaw_d), Rf)
+            w_loc = Rf.T @ v_feet[k][3:]
+            a_ang = s.swing_kp_rot * e - s.swing_kd_rot * w_loc
+            Jang = Rf.T @ J_feet[k][3:]
+            aang = Rf.T @ dJv_feet[k][3:]
+            rows_J.append(np.vstack([J_feet[k][:3], Jang[1:]]))
+            rows_b.append(np.concatenate([dJv_feet[k][:3], aang[1:]]))
+            rows_a.append(np.concatenate([a_lin, a_ang[1:]]))
+        for k in range(2):
+            a_h = s.hand_kp_acc * (hand_des[k] - p_hands[k]) + s.hand_kd_acc * (
+                hand_vel_des[k] - v_hands[k]
+            )
+            rows_J.append(J_hands[k][:3])
+            rows_b.append(r.frame_jdot_v(self.desc.hand_frames[k])[:3])
+            rows_a.append(a_h)
+        tasks.append(
+            AccelerationTask(np.vstack(rows_J), np.concatenate(rows_b), np.concatenate(rows_a))
+        )
+        return tasks
+
+    def _jacobian_mapping(
+        self,
+        stance: tuple[bool, ...],
+        wrench: FloatArray,
+        J_feet: list[FloatArray],
+        v_feet: list[FloatArray],
+        p_feet: FloatArray,
+        R_feet: list[FloatArray],
+        swing: list[tuple[FloatArray, FloatArray, FloatArray, float]],
+        J_hands: list[FloatArray],
+        p_hands: FloatArray,
+        v_hands: list[FloatArray],
+        hand_des: FloatArray,
+        hand_vel_des: FloatArray,
+        tau_ext: FloatArray,
+    ) -> FloatArray:
+        """Baseline: stance legs tau = h - J' W; swing legs and arms tau = h + J' F_PD."""
+        s = self.s
+        h = self.robot.h - tau_ext
+        tau_full = h.copy()
+        i_sw = 0
+        for k in range(2):
+            cols = self._cols_leg[k]
+            J = J_feet[k][:, cols]
+            if stance[k]:
+                tau_full[cols] -= J.T @ wrench[k]
+            elif i_sw < len(swing):
+                p_d, v_d, _, yaw_d = swing[i_sw]
+                i_sw += 1
+                F = s.swing_kp_force * (p_d - p_feet[k]) + s.swing_kd_force * (v_d - v_feet[k][:3])
+                e = rotation_error(rot_z(yaw_d), R_feet[k])
+                Mw = 20.0 * e - 1.0 * v_feet[k][3:]
+                tau_full[cols] += J.T @ np.concatenate([F, Mw])
+        for k in range(2):
+            cols = self._cols_arm[k]
+            F = s.hand_kp_force * (hand_des[k] - p_hands[k]) + s.hand_kd_force * (
+                hand_vel_des[k] - v_hands[k]
+            )
+            tau_full[cols] += J_hands[k][:3, cols].T @ F
+        return tau_full[6:]

@@ -1,0 +1,254 @@
+"""The closed loop: plan -> controller -> MuJoCo, logged to MCAP as it goes.
+
+Physics runs at the scene's timestep (1 ms); the controller runs every physics step (perfect
+state estimation, as the paper assumes). What metrics need is recorded into a `RunRecord`
+(pure arrays, `locoplan.metrics` turns them into numbers); what a person needs to look at is
+written to the MCAP log as the run goes, so a crash or Ctrl-C leaves a readable file.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from locoplan.control.controller import ControllerSettings, LocoManipulationController
+from locoplan.exceptions import SimulationError, SolverFailure
+from locoplan.log.writer import RunLogWriter, Transform
+from locoplan.plan import Plan
+from locoplan.robot.description import RobotDescription
+from locoplan.robot.pinocchio_model import PinocchioRobot
+from locoplan.sim.backend import MujocoBackend
+from locoplan.sim.scene import Scene
+
+FloatArray = npt.NDArray[np.float64]
+
+RECORD_PERIOD = 0.01  # s between recorded samples (metrics) and transform messages
+TILT_LIMIT = math.radians(60.0)
+
+
+@dataclass(frozen=True, slots=True)
+class Push:
+    """A force (N, world) applied to the trunk during [start, start + duration)."""
+
+    start: float
+    duration: float
+    force: tuple[float, float, float]
+
+
+@dataclass(slots=True)
+class RunRecord:
+    """What a run produced, sampled every RECORD_PERIOD (plus per-tick maxima)."""
+
+    joint_names: tuple[str, ...]
+    torque_limits: FloatArray
+    t: list[float] = field(default_factory=list)
+    base_position: list[FloatArray] = field(default_factory=list)
+    base_rpy: list[tuple[float, float, float]] = field(default_factory=list)
+    object_positions: dict[str, list[FloatArray]] = field(default_factory=dict)
+    peak_abs_torque: FloatArray = field(default_factory=lambda: np.zeros(16))
+    peak_torque_time: FloatArray = field(default_factory=lambda: np.zeros(16))
+    mpc_times_s: list[float] = field(default_factory=list)
+    wbc_times_s: list[float] = field(default_factory=list)
+    tick_split_s: dict[str, float] = field(default_factory=dict)
+    n_ticks: int = 0
+    n_clipped: int = 0
+    n_mpc_fallbacks: int = 0
+    n_wbc_failures: int = 0
+    fell: bool = False
+    fall_time: float | None = None
+    sim_time: float = 0.0
+    wall_time: float = 0.0
+    error: str | None = None
+
+
+def _rpy_wxyz(qw: float, qx: float, qy: float, qz: float) -> tuple[float, float, float]:
+    roll = math.atan2(2 * (qw * qx + qy * qz), 1 - 2 * (qx * qx + qy * qy))
+    pitch = math.asin(max(-1.0, min(1.0, 2 * (qw * qy - qz * qx))))
+    yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+    return roll, pitch, yaw
+
+
+class ClosedLoop:
+    """Owns the backend, the controller and the record for one run."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        desc: RobotDescription,
+        plan: Plan,
+        settings: ControllerSettings,
+        start_xy: tuple[float, float] = (0.0, 0.0),
+        start_yaw: float = 0.0,
+        log: RunLogWriter | None = None,
+        pushes: tuple[Push, ...] = (),
+    ) -> None:
+        self.scene = scene
+        self.desc = desc
+        self.plan = plan
+        self.backend = MujocoBackend(scene)
+        self.backend.reset(start_xy, start_yaw)
+        self.controller = LocoManipulationController(PinocchioRobot(desc), desc, plan, settings)
+        self.log = log
+        self.pushes = pushes
+        self.record = RunRecord(
+            joint_names=tuple(desc.joint_names),
+            torque_limits=np.asarray(desc.torque_limits, dtype=float).copy(),
+        )
+        for name in scene.object_body_ids:
+            self.record.object_positions[name] = []
+        m = scene.model
+        self._robot_bodies = [
+            (i, mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, i) or f"body{i}")
+            for i in range(1, m.nbody)
+            if not (mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, i) or "").startswith("object_")
+        ]
+        self._next_record = 0.0
+        if log is not None:
+            log.joint_limits(
+                list(desc.joint_names),
+                np.asarray(desc.torque_limits).tolist(),
+                np.asarray(desc.q_lower).tolist(),
+                np.asarray(desc.q_upper).tolist(),
+            )
+
+    def _apply_pushes(self, t: float) -> None:
+        f = np.zeros(3)
+        for p in self.pushes:
+            if p.start <= t < p.start + p.duration:
+                f += np.asarray(p.force)
+        self.backend.set_trunk_force(f)
+
+    def _record(self, t: float, out_tau: FloatArray, mpc_u: FloatArray | None) -> None:
+        rec = self.record
+        d = self.backend.data
+        pos = self.backend.base_position()
+        rpy = _rpy_wxyz(*self.backend.base_quat_wxyz())
+        rec.t.append(t)
+        rec.base_position.append(pos)
+        rec.base_rpy.append(rpy)
+        for name, bid in self.scene.object_body_ids.items():
+            rec.object_positions[name].append(np.asarray(d.xpos[bid]).copy())
+        if self.log is None:
+            return
+        transforms = [
+            Transform(
+                "world", name, np.asarray(d.xpos[i]).copy(), np.asarray(d.xquat[i])[[1, 2, 3, 0]]
+            )
+            for i, name in self._robot_bodies
+        ]
+        self.log.frame_transforms(t, transforms)
+        self.log.joint_states(
+            t,
+            list(self.desc.joint_names),
+            np.asarray(d.qpos[7:23]).copy(),
+            np.asarray(d.qvel[6:22]).copy(),
+            out_tau,
+        )
+        self.log.json(
+            "/robot/base",
+            t,
+            {"position": pos, "rpy_deg": np.degrees(np.asarray(rpy))},
+        )
+        self.log.json(
+            "/contact/measured",
+            t,
+            {"force_world": self.backend.foot_contact_forces()},
+        )
+
+    def run(
+        self,
+        t_end: float,
+        progress: Callable[[float], None] | None = None,
+    ) -> RunRecord:
+        """Simulate until `t_end` (s) or a fall. Raises SolverFailure / SimulationError."""
+        rec = self.record
+        be = self.backend
+        dt = be.dt
+        n_steps = round(t_end / dt)
+        wall0 = time.perf_counter()
+        split = {"physics": 0.0, "dynamics": 0.0, "mpc": 0.0, "wbc": 0.0, "logging": 0.0}
+        last_progress = 0.0
+        try:
+            for _ in range(n_steps):
+                t = be.time
+                state = be.robot_state()
+                out = self.controller.step(t, state.q, state.v)
+                split["dynamics"] += out.dynamics_time_s
+                split["mpc"] += out.mpc_time_s
+                split["wbc"] += out.wbc_time_s
+                if out.mpc is not None:
+                    rec.mpc_times_s.append(out.mpc_time_s)
+                    if getattr(out.mpc, "fallback", None):
+                        rec.n_mpc_fallbacks += 1
+                if out.wbc is not None:
+                    rec.wbc_times_s.append(out.wbc_time_s)
+                    if not out.wbc.ok:
+                        rec.n_wbc_failures += 1
+                rec.n_clipped += out.n_clipped
+                t_p = time.perf_counter()
+                self._apply_pushes(t)
+                be.step(out.tau_clipped)
+                split["physics"] += time.perf_counter() - t_p
+                rec.n_ticks += 1
+                applied = be.applied_torques()
+                a = np.abs(applied)
+                bigger = a > rec.peak_abs_torque
+                if bigger.any():
+                    rec.peak_abs_torque[bigger] = a[bigger]
+                    rec.peak_torque_time[bigger] = t
+                if not be.state_is_finite():
+                    raise SimulationError(t, "non-finite state (NaN or inf)")
+                t_l = time.perf_counter()
+                if t + 1e-9 >= self._next_record:
+                    self._next_record += RECORD_PERIOD
+                    self._record(be.time, applied, None)
+                    if self.log is not None and out.mpc is not None:
+                        self.log.json(
+                            "/mpc/solution",
+                            t,
+                            {
+                                "ok": out.mpc.ok,
+                                "status": out.mpc.status,
+                                "forces_world": out.mpc.forces_world,
+                                "moments_world": out.mpc.moments_world,
+                                "predicted_com": np.asarray(out.mpc.X)[:, 3:6],
+                                "solve_ms": out.mpc_time_s * 1e3,
+                            },
+                        )
+                    if self.log is not None:
+                        self.log.json(
+                            "/contact/schedule",
+                            t,
+                            {"stance": list(out.stance), "wrench_world": out.wrench_world},
+                        )
+                split["logging"] += time.perf_counter() - t_l
+                if not rec.fell and self._fallen():
+                    rec.fell = True
+                    rec.fall_time = be.time
+                    if self.log is not None:
+                        self.log.event(be.time, "fall", height=float(be.base_position()[2]))
+                    break
+                if progress is not None and be.time - last_progress >= 0.05:
+                    last_progress = be.time
+                    progress(be.time)
+        except (SolverFailure, SimulationError) as exc:
+            rec.error = str(exc)
+            raise
+        finally:
+            rec.sim_time = be.time
+            rec.wall_time = time.perf_counter() - wall0
+            rec.tick_split_s = split
+        return rec
+
+    def _fallen(self) -> bool:
+        pos = self.backend.base_position()
+        _, qx, qy, _ = self.backend.base_quat_wxyz()
+        # Tilt of the trunk's z axis from vertical: cos(tilt) = 1 - 2 (qx^2 + qy^2).
+        cos_tilt = 1.0 - 2.0 * (qx * qx + qy * qy)
+        return bool(pos[2] < self.desc.fall_height or cos_tilt < math.cos(TILT_LIMIT))

@@ -1,0 +1,131 @@
+"""MuJoCo scene: the robot's MJCF plus a floor, and the scenario's objects and fixtures.
+
+The robot file stays the single source of truth (pinocchio loads the same file); the scene
+only adds the world around it through `mujoco.MjSpec`. Objects become free bodies with
+collisions; fixtures are static boxes whose top surface is at `size[2]`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from locoplan.robot.description import RobotDescription
+from locoplan.robot.mujoco_model import load_mujoco_spec
+
+FloatArray = npt.NDArray[np.float64]
+
+FLOOR_FRICTION = 1.0
+FIXTURE_FRICTION = 1.0
+OBJECT_FRICTION = 1.0
+
+
+@dataclass(frozen=True, slots=True)
+class ObjectDef:
+    """A movable object: `size` is full extents (box) or [radius] (sphere); SI units."""
+
+    name: str
+    shape: str
+    size: tuple[float, ...]
+    mass: float
+    position: tuple[float, float, float]
+    yaw: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class FixtureDef:
+    """Static scenery: `position` is the footprint centre on the floor, `size` full extents."""
+
+    name: str
+    kind: str
+    position: tuple[float, float, float]
+    size: tuple[float, float, float]
+    yaw: float = 0.0
+    speed: float = 0.0
+
+
+@dataclass(slots=True)
+class Scene:
+    """A compiled MuJoCo scene with the ids the simulator needs."""
+
+    model: mujoco.MjModel
+    robot: RobotDescription
+    object_body_ids: dict[str, int] = field(default_factory=dict)
+    fixture_geom_ids: dict[str, int] = field(default_factory=dict)
+    floor_geom_id: int = -1
+
+
+def _yaw_quat(yaw: float) -> list[float]:
+    return [math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)]
+
+
+def build_scene(
+    robot: RobotDescription,
+    objects: tuple[ObjectDef, ...] = (),
+    fixtures: tuple[FixtureDef, ...] = (),
+    timestep: float = 0.001,
+) -> Scene:
+    """Compile robot + floor + objects + fixtures into one MjModel (physics step `timestep` s)."""
+    spec = load_mujoco_spec(robot)
+    spec.option.timestep = timestep
+    world = spec.worldbody
+    world.add_light(
+        name="sun", pos=[0.0, 0.0, 3.0], dir=[0.0, 0.0, -1.0], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
+    )
+    world.add_geom(
+        name="floor",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[20.0, 20.0, 0.1],
+        friction=[FLOOR_FRICTION, 0.005, 0.0001],
+        rgba=[0.8, 0.8, 0.8, 1.0],
+        contype=1,
+        conaffinity=1,
+    )
+    for fx in fixtures:
+        sx, sy, sz = fx.size
+        world.add_geom(
+            name=f"fixture_{fx.name}",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[sx / 2, sy / 2, sz / 2],
+            pos=[fx.position[0], fx.position[1], fx.position[2] + sz / 2],
+            quat=_yaw_quat(fx.yaw),
+            friction=[FIXTURE_FRICTION, 0.005, 0.0001],
+            rgba=[0.55, 0.4, 0.25, 1.0] if fx.kind != "conveyor" else [0.2, 0.2, 0.25, 1.0],
+            contype=1,
+            conaffinity=1,
+        )
+    for ob in objects:
+        body = world.add_body(
+            name=f"object_{ob.name}", pos=list(ob.position), quat=_yaw_quat(ob.yaw)
+        )
+        body.add_freejoint(name=f"object_{ob.name}_free")
+        if ob.shape == "box":
+            gtype, gsize = mujoco.mjtGeom.mjGEOM_BOX, [s / 2 for s in ob.size]
+        else:
+            gtype, gsize = mujoco.mjtGeom.mjGEOM_SPHERE, [ob.size[0], 0.0, 0.0]
+        body.add_geom(
+            name=f"object_{ob.name}_geom",
+            type=gtype,
+            size=gsize,
+            mass=ob.mass,
+            friction=[OBJECT_FRICTION, 0.005, 0.0001],
+            rgba=[0.85, 0.6, 0.2, 1.0],
+            contype=1,
+            conaffinity=1,
+        )
+    model = spec.compile()
+    scene = Scene(model=model, robot=robot)
+    scene.floor_geom_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    for ob in objects:
+        scene.object_body_ids[ob.name] = mujoco.mj_name2id(
+            model, mujoco.mjtObj.mjOBJ_BODY, f"object_{ob.name}"
+        )
+    for fx in fixtures:
+        scene.fixture_geom_ids[fx.name] = mujoco.mj_name2id(
+            model, mujoco.mjtObj.mjOBJ_GEOM, f"fixture_{fx.name}"
+        )
+    return scene
