@@ -90,6 +90,9 @@ def fixed_length(loc: Loc, action: str | None) -> int | None:
     metadata = list(info.metadata)
     for arg in get_args(info.annotation):  # `Annotated[list, Field(...)] | None`
         metadata.extend(getattr(arg, "__metadata__", ()))
+    for item in list(metadata):
+        if isinstance(item, FieldInfo):  # `Field(min_length=...)` nested in an Annotated
+            metadata.extend(item.metadata)
     for item in metadata:
         low = getattr(item, "min_length", low)
         high = getattr(item, "max_length", high)

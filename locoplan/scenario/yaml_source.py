@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ruamel.yaml import YAML
-from ruamel.yaml.comments import CommentedMap, CommentedSeq
+from ruamel.yaml.comments import CommentedMap, CommentedSeq, TaggedScalar
 from ruamel.yaml.constructor import ConstructorError, RoundTripConstructor
 from ruamel.yaml.error import MarkedYAMLError, YAMLError
 from ruamel.yaml.events import (
@@ -318,6 +318,8 @@ def _plain_scalar(value: Any) -> Any:
     # ruamel's scalar types subclass the builtins (ScalarBoolean subclasses int, not bool).
     if type(value).__name__ == "ScalarBoolean":
         return bool(value)
+    if isinstance(value, TaggedScalar):  # `!!str 7`; other tags were refused by the scan
+        return str(value.value)
     for cls in (bool, int, float, str):
         if isinstance(value, cls):
             return cls(value)
