@@ -93,16 +93,8 @@ def load_scenario_file(source: str | Path, text: str | bytes | None = None) -> L
         return ScenarioIssue(label, line, column, issue.message)
 
     if doc.data is None:
-        raise ScenarioError(
-            [
-                ScenarioIssue(
-                    label,
-                    1,
-                    1,
-                    "empty task script; expected a mapping with at least version, name and tasks",
-                )
-            ]
-        )
+        message = "empty task script; expected a mapping with at least version, name and tasks"
+        raise ScenarioError([ScenarioIssue(label, 1, 1, message)])
     if not isinstance(doc.data, dict):
         line, column = doc.locate(())
         message = (
