@@ -111,8 +111,8 @@ class ControllerSettings:
     swing_kd_acc: float = 60.0
     swing_kp_force: float = 1000.0
     swing_kd_force: float = 30.0
-    swing_kp_rot: float = 400.0
-    swing_kd_rot: float = 30.0
+    swing_kp_rot: float = 2000.0
+    swing_kd_rot: float = 80.0
     swing_height: float = 0.08
     raibert_gain: float = 0.05
     hand_kp_acc: float = 400.0
@@ -134,6 +134,7 @@ class ControlOutput:
     wrench_world: FloatArray
     stance: tuple[bool, bool]
     foot_targets: FloatArray
+    foot_yaw_targets: FloatArray
     hand_targets: FloatArray
     mpc: MpcSolution | None
     mpc_time_s: float
@@ -341,6 +342,7 @@ class LocoManipulationController:
 
         # Swing-foot targets.
         foot_targets = np.full((2, 3), np.nan)
+        foot_yaw_targets = np.full(2, np.nan)
         swing_acc: list[tuple[FloatArray, FloatArray, FloatArray, float]] = []
         for k in range(2):
             if stance[k]:
@@ -356,6 +358,7 @@ class LocoManipulationController:
             sb, _, _ = min_jerk(phase)
             yaw_des = sw.yaw_start + sb * wrap_angle(yaw_td - sw.yaw_start)
             foot_targets[k] = pt.position
+            foot_yaw_targets[k] = yaw_des
             swing_acc.append((pt.position, pt.velocity, pt.acceleration, yaw_des))
         # Hand targets.
         base_pos = q[:3]
@@ -426,6 +429,7 @@ class LocoManipulationController:
             wrench_world=wrench,
             stance=(stance[0], stance[1]),
             foot_targets=foot_targets,
+            foot_yaw_targets=foot_yaw_targets,
             hand_targets=hand_targets,
             mpc=mpc_sol,
             mpc_time_s=mpc_time,
