@@ -245,6 +245,149 @@ def plan_command(
 
 # --- run ------------------------------------------------------------------------------------
 
+_RUN_FILE = typer.Argument(
+    ..., metavar="FILE", help="Task script (YAML); '-' reads it from standard input."
+)
+
+
+@app.command("run")
+def run_command(
+    file: str = _RUN_FILE,
+    out_dir: str = typer.Option("runs", "--out", metavar="DIR", help="Where the MCAP log goes."),
+    metrics_json: str | None = typer.Option(
+        None, "--metrics-json", metavar="PATH", help="Also write the metrics as JSON."
+    ),
+    strategy: str | None = typer.Option(
+        None, "--strategy", metavar="S", help="dynamic | quasi-static (default: the script's)."
+    ),
+    model: str | None = typer.Option(
+        None,
+        "--model",
+        metavar="M",
+        help="external-force (paper's Model 2) | combined (Model 1) (default: the script's).",
+    ),
+    duration_scale: float = typer.Option(
+        1.0, "--duration-scale", metavar="K", help="Stretch every task time and 'end' by K."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress bar and no table."),
+    mapping: str = typer.Option(
+        "wbc", "--mapping", help="Torque mapping: wbc (paper's WBC QP) | jacobian (baseline)."
+    ),
+    qp_backend: str = typer.Option(
+        "proxsuite", "--qp", help="QP solver for MPC and WBC: proxsuite | piqp."
+    ),
+    f_min: float | None = typer.Option(
+        None, "--f-min", metavar="N", help="Minimum vertical force per stance foot (default 10 N)."
+    ),
+    debug: bool = typer.Option(False, "--debug", help="Show Python tracebacks of failures."),
+) -> None:
+    """Run one task script closed loop in MuJoCo (multi-contact MPC + WBC).
+
+    Writes DIR/<name>.mcap (open it in Foxglove: robot, contacts, MPC forces, torques)
+    and prints the metrics. Exit status: 0 every expectation held, 1 an expectation
+    failed, 2 bad input, 3 the run broke (solver failure, simulator instability),
+    130 interrupted. The log written so far stays readable in every case.
+
+    Examples:
+
+      locoplan run scenarios/walk-square.yaml
+
+      locoplan run scenarios/package-transfer.yaml --strategy quasi-static --metrics-json qs.json
+
+      locoplan run scenarios/turn.yaml --duration-scale 1.5 --out /tmp/runs --quiet
+    """
+    import json
+    from pathlib import Path
+
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from locoplan.exceptions import SimulationError, SolverFailure
+    from locoplan.log.termination import install_termination_handlers
+    from locoplan.plan import STRATEGIES, PlanError
+    from locoplan.report.metrics_table import metrics_table
+    from locoplan.scenario.model import Scenario
+    from locoplan.sim.run import RunOptions, run_scenario
+
+    if strategy is not None and strategy not in STRATEGIES:
+        _fail(EXIT_BAD_INPUT, f"unknown --strategy '{strategy}'; allowed: {', '.join(STRATEGIES)}")
+    if model is not None and model not in ("external-force", "combined"):
+        _fail(EXIT_BAD_INPUT, f"unknown --model '{model}'; allowed: external-force, combined")
+    if mapping not in ("wbc", "jacobian"):
+        _fail(EXIT_BAD_INPUT, f"unknown --mapping '{mapping}'; allowed: wbc, jacobian")
+    if qp_backend not in ("proxsuite", "piqp"):
+        _fail(EXIT_BAD_INPUT, f"unknown --qp '{qp_backend}'; allowed: proxsuite, piqp")
+    if not duration_scale > 0:
+        _fail(EXIT_BAD_INPUT, f"--duration-scale must be positive, got {duration_scale}")
+    scenario, text = _load_with_text_or_exit(file)
+    assert isinstance(scenario, Scenario)
+    options = RunOptions(
+        strategy=strategy,
+        model=model,
+        duration_scale=duration_scale,
+        out_dir=Path(out_dir),
+        mapping=mapping,
+        qp_backend=qp_backend,
+        f_min=f_min,
+    )
+    show = not quiet and out.is_terminal
+    restore = install_termination_handlers()
+    log_hint = Path(out_dir) / f"{scenario.name}.mcap"
+    try:
+        with Progress(
+            TextColumn("[bold]{task.description}"),
+            BarColumn(),
+            TextColumn("t = {task.completed:.2f} / {task.total:.2f} s"),
+            TimeElapsedColumn(),
+            console=out,
+            disable=not show,
+            transient=True,
+        ) as bar:
+            task_id = bar.add_task(scenario.name, total=1.0)
+
+            def on_progress(t: float, total: float) -> None:
+                bar.update(task_id, completed=t, total=total)
+
+            result = run_scenario(scenario, text, options, on_progress)
+    except PlanError as exc:
+        _fail(EXIT_BAD_INPUT, f"{file}: cannot plan: {exc}")
+    except (SolverFailure, SimulationError) as exc:
+        if debug:
+            raise
+        _fail(EXIT_RUN_BROKE, f"run failed: {exc}\nthe log up to the failure is in {log_hint}")
+    except (KeyboardInterrupt, SystemExit) as exc:
+        if isinstance(exc, SystemExit) and exc.code in (0, None):
+            raise
+        _fail(EXIT_INTERRUPTED, f"interrupted; the log up to here is in {log_hint}")
+    finally:
+        restore()
+    if metrics_json is not None:
+        try:
+            Path(metrics_json).write_text(json.dumps(result.metrics, indent=2) + "\n", "utf-8")
+        except OSError as exc:
+            _fail(EXIT_BAD_INPUT, f"cannot write {metrics_json}: {exc.strerror or exc}")
+    if not quiet:
+        out.print(metrics_table(result.metrics))
+    raise typer.Exit(EXIT_OK if result.passed else EXIT_EXPECTATION)
+
+
+def _load_with_text_or_exit(name: str) -> tuple[object, str]:
+    """Load a task script and its text; on bad input print every issue and exit 2."""
+    from locoplan.exceptions import ScenarioError
+    from locoplan.scenario import load_scenario_file
+    from locoplan.scenario.source import MAX_BYTES
+
+    data: bytes | str | None = None
+    if name == "-":
+        buffer = getattr(sys.stdin, "buffer", None)
+        data = buffer.read(MAX_BYTES + 1) if buffer else sys.stdin.read()
+    try:
+        loaded = load_scenario_file(name, data)
+    except ScenarioError as exc:
+        for issue in exc.issues:
+            err.print(str(issue), markup=False, emoji=False, highlight=False)
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+    return loaded.scenario, loaded.text
+
 
 def main() -> None:
     """Console-script entry point."""
@@ -253,3 +396,12 @@ def main() -> None:
     except KeyboardInterrupt:
         err.print("interrupted", markup=False)
         sys.exit(EXIT_INTERRUPTED)
+    except Exception as exc:
+        # Bugs end here: say what broke without a traceback unless --debug asked for one.
+        if "--debug" in sys.argv:
+            raise
+        err.print(
+            f"internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)",
+            markup=False,
+        )
+        sys.exit(EXIT_RUN_BROKE)

@@ -74,7 +74,10 @@ def build_scene(
     spec.option.timestep = timestep
     world = spec.worldbody
     world.add_light(
-        name="sun", pos=[0.0, 0.0, 3.0], dir=[0.0, 0.0, -1.0], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
+        name="sun",
+        pos=[0.0, 0.0, 3.0],
+        dir=[0.0, 0.0, -1.0],
+        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
     )
     world.add_geom(
         name="floor",

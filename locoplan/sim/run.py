@@ -1,0 +1,287 @@
+"""One closed-loop run of a task script: plan -> scene -> loop -> metrics, logged to MCAP.
+
+`run_scenario` is what `locoplan run`, `compare` and `batch` call. It never prints; progress
+goes through a callback. The MCAP log is opened before the first tick and closed whatever
+happens (a solver failure, a simulator instability, Ctrl-C or SIGTERM), so the file written
+so far is always readable.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from locoplan.control.contact import ContactLimits
+from locoplan.control.controller import ControllerSettings
+from locoplan.control.mpc import MpcSettings
+from locoplan.log.writer import RunLogWriter
+from locoplan.metrics import (
+    TaskGoal,
+    expectation_results,
+    goal_times,
+    solve_time_stats,
+    torque_peaks,
+    unwrap_yaw,
+    yaw_difference_deg,
+)
+from locoplan.plan import Plan, compile_plan
+from locoplan.robot.description import RobotDescription, load_robot_description
+from locoplan.scenario import Scenario
+from locoplan.sim.loop import ClosedLoop, Push, RunRecord
+from locoplan.sim.scene import FixtureDef, ObjectDef, Scene, build_scene
+
+ON_FIXTURE_TOL = 0.03  # m: object bottom within this of a fixture's top counts as resting on it
+
+
+@dataclass(frozen=True, slots=True)
+class RunOptions:
+    """How to run: strategy/model override the script's; `duration_scale` stretches every
+    task time and `end` (K > 1 is slower); `mapping` and `qp_backend` select the torque mapping
+    and QP solver; `pushes` are trunk disturbances (tests, robustness studies)."""
+
+    strategy: str | None = None
+    model: str | None = None
+    duration_scale: float = 1.0
+    out_dir: Path = Path("runs")
+    log: bool = True
+    mapping: str = "wbc"
+    qp_backend: str = "proxsuite"
+    f_min: float | None = None
+    pushes: tuple[Push, ...] = ()
+    log_name: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class RunResult:
+    """Metrics (the contract's JSON keys), the raw record and the log path."""
+
+    metrics: dict[str, Any]
+    record: RunRecord
+    plan: Plan
+    log_path: Path | None
+    passed: bool
+
+
+def scene_for(scenario: Scenario, desc: RobotDescription) -> Scene:
+    """MuJoCo scene with the script's objects and fixtures (angles converted to radians)."""
+    objects = tuple(
+        ObjectDef(
+            name=name,
+            shape=o.shape,
+            size=tuple(o.size),
+            mass=o.mass,
+            position=(o.position[0], o.position[1], o.position[2]),
+            yaw=math.radians(o.yaw),
+        )
+        for name, o in scenario.objects.items()
+    )
+    fixtures = tuple(
+        FixtureDef(
+            name=name,
+            kind=f.kind,
+            position=(f.position[0], f.position[1], f.position[2]),
+            size=(f.size[0], f.size[1], f.size[2]),
+            yaw=math.radians(f.yaw),
+            speed=f.speed or 0.0,
+        )
+        for name, f in scenario.fixtures.items()
+    )
+    return build_scene(desc, objects, fixtures)
+
+
+def _task_goals(plan: Plan) -> list[TaskGoal]:
+    goals = []
+    for task in plan.tasks:
+        if task.action in ("walk", "turn"):
+            ref = plan.trunk_reference_at(task.end)
+            goals.append(
+                TaskGoal(
+                    task.action,
+                    task.start,
+                    task.end,
+                    target_position=np.asarray(ref.position, dtype=float),
+                    target_yaw=float(ref.yaw),
+                )
+            )
+        else:
+            goals.append(TaskGoal(task.action, task.start, task.end, object=task.object))
+    return goals
+
+
+def _object_state(
+    scenario: Scenario, rec: RunRecord, name: str
+) -> tuple[list[float], str | None, bool]:
+    """Final position, the fixture it rests on (or None) and whether it is still lifted."""
+    traj = np.asarray(rec.object_positions[name])
+    pos = traj[-1]
+    spec = scenario.objects[name]
+    half_h = spec.size[0] if spec.shape == "sphere" else spec.size[2] / 2
+    moving = False
+    if len(traj) > 5:
+        moving = bool(np.linalg.norm(traj[-1] - traj[-5]) / (4 * 0.01) > 0.05)
+    on: str | None = None
+    for fname, f in scenario.fixtures.items():
+        c, s = math.cos(math.radians(f.yaw)), math.sin(math.radians(f.yaw))
+        dx, dy = pos[0] - f.position[0], pos[1] - f.position[1]
+        lx, ly = c * dx + s * dy, -s * dx + c * dy
+        inside = abs(lx) <= f.size[0] / 2 and abs(ly) <= f.size[1] / 2
+        if inside and abs(pos[2] - half_h - f.size[2]) <= ON_FIXTURE_TOL and not moving:
+            on = fname
+    lifted = bool(pos[2] - half_h > 0.05 and on is None)
+    return [round(float(x), 4) for x in pos], on, lifted
+
+
+def compute_metrics(
+    scenario: Scenario,
+    plan: Plan,
+    rec: RunRecord,
+    options: RunOptions,
+    log_path: Path | None,
+) -> dict[str, Any]:
+    """The metrics object of shared/cli-contract.md from a finished (or fallen) run."""
+    t = np.asarray(rec.t)
+    pos = np.asarray(rec.base_position).reshape(-1, 3)
+    yaw = unwrap_yaw(np.asarray(rec.base_rpy).reshape(-1, 3)[:, 2]) if rec.t else np.zeros(0)
+    goals = _task_goals(plan)
+    objects: dict[str, dict[str, Any]] = {}
+    for name in scenario.objects:
+        if rec.object_positions[name]:
+            p, on, held = _object_state(scenario, rec, name)
+            objects[name] = {"position": p, "on": on, "held": held}
+    times = goal_times(t, pos[:, :2], yaw, goals, rec.fall_time, {})
+    completed = bool(times) and all(x is not None for x in times) and not rec.fell
+    completion = max(x for x in times if x is not None) if completed else None
+    ratio, joint, peaks = torque_peaks(rec.peak_abs_torque, rec.torque_limits, rec.joint_names)
+    rtf = rec.sim_time / rec.wall_time if rec.wall_time > 0 else 0.0
+    metrics: dict[str, Any] = {
+        "scenario": scenario.name,
+        "strategy": plan.strategy,
+        "model": options.model or scenario.model,
+        "sim_time": round(rec.sim_time, 4),
+        "wall_time": round(rec.wall_time, 3),
+        "real_time_factor": round(rtf, 3),
+        "completed": completed,
+        "completion_time": None if completion is None else round(completion, 3),
+        "fell": rec.fell,
+        "fall_time": rec.fall_time,
+        "yaw_difference_deg": (
+            None if (d := yaw_difference_deg(t, yaw, goals)) is None or not t.size else round(d, 2)
+        ),
+        "peak_torque_ratio": round(ratio, 4),
+        "peak_torque_joint": joint,
+        "peak_torque": peaks,
+        "final_base": {
+            "position": [round(float(x), 4) for x in pos[-1]] if len(pos) else None,
+            "yaw_deg": round(math.degrees(float(yaw[-1])), 2) if len(yaw) else None,
+        },
+        "objects": objects,
+        "mpc_solve_ms": solve_time_stats(rec.mpc_times_s),
+        "wbc_solve_ms": solve_time_stats(rec.wbc_times_s),
+        "torque_clips": rec.n_clipped,
+        "mpc_fallbacks": rec.n_mpc_fallbacks,
+        "wbc_failures": rec.n_wbc_failures,
+        "task_goal_times": [None if x is None else round(x, 3) for x in times],
+    }
+    expect = scenario.expect.model_dump(exclude_none=True)
+    results = expectation_results(expect, metrics)
+    metrics["expectations"] = results
+    metrics["passed"] = all(r["ok"] for r in results.values())
+    metrics["log"] = str(log_path) if log_path is not None else None
+    return metrics
+
+
+def controller_settings(scenario: Scenario, options: RunOptions) -> ControllerSettings:
+    """Controller settings from the script (`mpc`, `model`) and the run options."""
+    limits = ContactLimits()
+    if options.f_min is not None:
+        limits = replace(limits, f_min=options.f_min)
+    mpc = MpcSettings(
+        dt=scenario.mpc.dt,
+        horizon=scenario.mpc.horizon,
+        f_min=limits.f_min,
+        f_max=limits.f_max,
+        backend=options.qp_backend,
+    )
+    model = options.model or scenario.model
+    return ControllerSettings(
+        mapping="jacobian" if options.mapping == "jacobian" else "wbc",
+        model="combined" if model == "combined" else "external-force",
+        qp_backend=options.qp_backend,
+        mpc=mpc,
+        limits=limits,
+    )
+
+
+@dataclass(slots=True)
+class _Progress:
+    callback: Callable[[float, float], None] | None
+    total: float
+    calls: list[float] = field(default_factory=list)
+
+    def __call__(self, t: float) -> None:
+        if self.callback is not None:
+            self.callback(t, self.total)
+
+
+def run_scenario(
+    scenario: Scenario,
+    scenario_text: str,
+    options: RunOptions | None = None,
+    progress: Callable[[float, float], None] | None = None,
+) -> RunResult:
+    """Run `scenario` closed loop. Raises SolverFailure / SimulationError when the run breaks
+    (the log is closed and readable), KeyboardInterrupt / SystemExit when interrupted."""
+    options = options or RunOptions()
+    if options.duration_scale != 1.0:
+        from locoplan.scenario.timing import scale_timing
+
+        scenario = scale_timing(scenario, options.duration_scale)
+    plan = compile_plan(scenario, options.strategy)
+    desc = load_robot_description(scenario.robot)
+    scene = scene_for(scenario, desc)
+    settings = controller_settings(scenario, options)
+    log_path: Path | None = None
+    writer: RunLogWriter | None = None
+    if options.log:
+        options.out_dir.mkdir(parents=True, exist_ok=True)
+        stem = options.log_name or (
+            scenario.name if options.strategy is None else f"{scenario.name}-{plan.strategy}"
+        )
+        log_path = options.out_dir / f"{stem}.mcap"
+        writer = RunLogWriter(
+            log_path,
+            scenario_name=scenario.name,
+            scenario_text=scenario_text,
+            metadata={
+                "strategy": plan.strategy,
+                "model": settings.model,
+                "mapping": settings.mapping,
+                "qp_backend": settings.qp_backend,
+            },
+        )
+    start = scenario.robot_start
+    with writer if writer is not None else contextlib.nullcontext():
+        loop = ClosedLoop(
+            scene,
+            desc,
+            plan,
+            settings,
+            start_xy=(start.position[0], start.position[1]),
+            start_yaw=math.radians(start.yaw),
+            log=writer,
+            pushes=options.pushes,
+        )
+        for ev in plan.events:
+            if writer is not None and ev.kind in ("task_start", "task_end"):
+                writer.event(ev.t, ev.kind, task_index=ev.task_index, detail=ev.detail)
+        rec = loop.run(plan.t_end, _Progress(progress, plan.t_end))
+        metrics = compute_metrics(scenario, plan, rec, options, log_path)
+        if writer is not None:
+            writer.finish(metrics)
+    return RunResult(metrics, rec, plan, log_path, bool(metrics["passed"]))
