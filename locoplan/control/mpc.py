@@ -31,7 +31,7 @@ states as variables with the dynamics as equalities (for comparison).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Final
 
 import numpy as np
@@ -49,8 +49,23 @@ MODELS: Final[tuple[str, ...]] = ("external-force", "combined")
 FORMULATIONS: Final[tuple[str, ...]] = ("condensed", "sparse")
 FALLBACKS: Final[tuple[str, ...]] = ("none", "relaxed", "shifted")
 
-_DEFAULT_Q: Final = (1500.0, 2000.0, 1000.0, 1000.0, 1000.0, 1000.0, 1.0, 3.0, 10.0,
-                     1.0, 1.0, 1.0, 0.0, 0.0, 0.0)  # fmt: skip
+_DEFAULT_Q: Final = (
+    1500.0,
+    2000.0,
+    1000.0,
+    1000.0,
+    1000.0,
+    1000.0,
+    1.0,
+    3.0,
+    10.0,
+    1.0,
+    1.0,
+    1.0,
+    0.0,
+    0.0,
+    0.0,
+)
 _DEFAULT_R: Final = tuple(1e-4 * w for w in (1, 1, 1, 1, 1, 1, 5, 5, 5, 5))
 
 
@@ -58,10 +73,11 @@ def _default_qp_settings() -> QpSettings:
     return QpSettings(
         eps_abs=1e-6,
         eps_gap_abs=1e-6,
-        max_iter=100,
+        max_iter=50,
+        max_iter_in=10,
         scaling=True,
         preconditioner=False,
-        unconstrained_first=True,
+        active_set_iter=50,
         eps_primal_inf=1e-9,
     )
 
@@ -76,9 +92,10 @@ class MpcSettings:
     foot lengths ahead of/behind the ankle (m), ``mu_torsion`` (m) bounds |Mz'| <= mu_t Fz if
     given. ``backend`` "proxsuite" | "piqp", ``formulation`` "condensed" | "sparse", ``qp``
     the solver settings. ``fallback``: on a failed QP try the relaxed problem (f_min = 0, more
-    iterations, fresh solver), then the previous solution shifted by one step; if False, raise
-    `SolverFailure` at once. The force bounds are not cross-checked here: an empty range makes
-    every QP infeasible, which `MultiContactMpc.update` reports as a failure.
+    iterations, fresh solver; ``relaxed_qp`` overrides its solver settings), then the previous
+    solution shifted by one step; if False, raise `SolverFailure` at once. The force bounds
+    are not cross-checked here: an empty range makes every QP infeasible, which
+    `MultiContactMpc.update` reports as a failure.
     """
 
     dt: float = 0.03
@@ -95,6 +112,7 @@ class MpcSettings:
     formulation: str = "condensed"
     qp: QpSettings = field(default_factory=_default_qp_settings)
     fallback: bool = True
+    relaxed_qp: QpSettings | None = None
 
     def __post_init__(self) -> None:
         if not self.dt > 0:
@@ -236,16 +254,20 @@ class _Kernel:
     ``K_cols`` (N, 6N, 6): column block l of the (6N, 6N) matrix of blocks K[k, l].
     ``C`` (N, 3, 3): C_i = sum_{j <= i} R_z(yaw_j)^T; ``E`` (N, 3, 3): C_k - R_z(yaw_k)^T / 2,
     so that the pitch/roll/yaw response of x_{i+1} to step k's omega kick is
-    dt (C_i - E_k) (i >= k). ``RzT`` (N, 3, 3).
+    dt (C_i - E_k) (i >= k). ``RzT`` (N, 3, 3). ``Iinv`` (N, 3, 3) the trunk's inverse world
+    inertia R_z I_body^-1 R_z^T (also keyed on I_body).
     """
 
     K_cols: FloatArray
     C: FloatArray
     E: FloatArray
     RzT: FloatArray
+    Iinv: FloatArray
 
 
-def _build_kernel(N: int, dt: float, q: FloatArray, yaw_lin: FloatArray) -> _Kernel:
+def _build_kernel(
+    N: int, dt: float, q: FloatArray, yaw_lin: FloatArray, Ib_inv: FloatArray
+) -> _Kernel:
     q_th, q_p, q_w, q_v = q[0:3], q[3:6], q[6:9], q[9:12]
     RzT = np.swapaxes(_rot_z_stack(yaw_lin), -1, -2)
     C = np.cumsum(RzT, axis=0)
@@ -278,7 +300,8 @@ def _build_kernel(N: int, dt: float, q: FloatArray, yaw_lin: FloatArray) -> _Ker
     K[:, :, 4, 4] = diag_v[..., 1]
     K[:, :, 5, 5] = diag_v[..., 2]
     K_cols = np.ascontiguousarray(K.transpose(1, 0, 2, 3).reshape(N, 6 * N, 6))
-    return _Kernel(K_cols=K_cols, C=C, E=E, RzT=RzT)
+    Iinv = np.swapaxes(RzT, 1, 2) @ Ib_inv @ RzT
+    return _Kernel(K_cols=K_cols, C=C, E=E, RzT=RzT, Iinv=Iinv)
 
 
 @dataclass(frozen=True, slots=True)
@@ -286,70 +309,90 @@ class _StepTerms:
     """Per-step quantities of one problem (all world frame).
 
     ``Iinv`` (N, 3, 3) inverse world inertia, ``mass`` (N,), ``tau_ext`` (N, 3) and
-    ``f_ext`` (N, 3) the known external torque about the lever origin and force, ``Tw`` (N, 2,
-    3, 5) the torque of a unit foot-frame wrench, ``Rf`` (N, 2, 3, 3) the foot rotations,
-    ``Phi`` (N, 6, 10) the omega/pdot kicks of the 10 wrench components of step k (zero
-    columns for swing feet), ``cols`` the stance variable indices into the 10N layout.
+    ``f_ext`` (N, 3) the known external torque about the lever origin and force (None when no
+    object is held), ``Tw`` (N, 2, 3, 5) the torque of a unit foot-frame wrench, ``Rf``
+    (N, 2, 3, 3) the foot rotations, ``Phi`` (N, 6, 10) the omega/pdot kicks of the 10 wrench
+    components of step k (zero columns for swing feet), ``cols`` the stance variable indices
+    into the 10N layout.
     """
 
     Iinv: FloatArray
     mass: FloatArray
-    tau_ext: FloatArray
-    f_ext: FloatArray
+    tau_ext: FloatArray | None
+    f_ext: FloatArray | None
     Tw: FloatArray
     Rf: FloatArray
     Phi: FloatArray
     cols: npt.NDArray[np.intp]
 
 
-def _step_terms(inp: MpcInput, dt: float, Ib_inv: FloatArray, Ib: FloatArray) -> _StepTerms:
+def _step_terms(inp: MpcInput, dt: float, Iinv_model2: FloatArray, Ib: FloatArray) -> _StepTerms:
+    """Per-step terms; ``Iinv_model2`` (N, 3, 3) is R_z I_body^-1 R_z^T at yaw_lin (cached)."""
     N = inp.horizon
-    Rz = _rot_z_stack(inp.yaw_lin)
     p_com = np.empty((N, 3))
     p_com[0] = inp.x0[srbd.POS]
     p_com[1:] = inp.x_ref[:-1, srbd.POS]
     mass = np.full(N, inp.mass)
-    tau_ext = np.zeros((N, 3))
-    f_ext = np.zeros((N, 3))
+    tau_ext: FloatArray | None = None
+    f_ext: FloatArray | None = None
     m_o = np.broadcast_to(np.asarray(inp.object_mass, dtype=np.float64), (N,))
     held = inp.object_held & (m_o > 0.0)
     lever = p_com
-    if inp.model == "combined" and held.any():
+    Iinv = Iinv_model2
+    if held.any():
         assert inp.p_object is not None
-        I_w = Rz @ Ib @ np.swapaxes(Rz, 1, 2)
-        m_t = inp.mass + m_o
-        p_h = (inp.mass * p_com + m_o[:, None] * inp.p_object) / m_t[:, None]
-        d_c = p_com - p_h
-        d_o = inp.p_object - p_h
-        eye = np.eye(3)
-        pm = inp.mass * (np.einsum("ki,ki->k", d_c, d_c)[:, None, None] * eye
-                         - d_c[:, :, None] * d_c[:, None, :])  # fmt: skip
-        pm += m_o[:, None, None] * (np.einsum("ki,ki->k", d_o, d_o)[:, None, None] * eye
-                     - d_o[:, :, None] * d_o[:, None, :])  # fmt: skip
-        I_w = np.where(held[:, None, None], I_w + pm, I_w)
-        Iinv = np.asarray(np.linalg.inv(I_w), dtype=np.float64)
-        mass = np.where(held, m_t, mass)
-        lever = np.where(held[:, None], p_h, p_com)
-    else:
-        Iinv = Rz @ Ib_inv @ np.swapaxes(Rz, 1, 2)
-        if held.any():
-            assert inp.p_object is not None
+        if inp.model == "combined":
+            Rz = _rot_z_stack(inp.yaw_lin)
+            I_w = Rz @ Ib @ np.swapaxes(Rz, 1, 2)
+            m_t = inp.mass + m_o
+            p_h = (inp.mass * p_com + m_o[:, None] * inp.p_object) / m_t[:, None]
+            d_c = p_com - p_h
+            d_o = inp.p_object - p_h
+            eye = np.eye(3)
+            pm = inp.mass * (
+                np.einsum("ki,ki->k", d_c, d_c)[:, None, None] * eye
+                - d_c[:, :, None] * d_c[:, None, :]
+            )
+            pm += m_o[:, None, None] * (
+                np.einsum("ki,ki->k", d_o, d_o)[:, None, None] * eye
+                - d_o[:, :, None] * d_o[:, None, :]
+            )
+            I_w = np.where(held[:, None, None], I_w + pm, I_w)
+            Iinv = np.asarray(np.linalg.inv(I_w), dtype=np.float64)
+            mass = np.where(held, m_t, mass)
+            lever = np.where(held[:, None], p_h, p_com)
+        else:
+            f_ext = np.zeros((N, 3))
             f_ext[held, 2] = -m_o[held] * srbd.GRAVITY
             tau_ext = np.cross(inp.p_object - p_com, f_ext)
     r = inp.p_feet - lever[:, None, :]  # (N, 2, 3)
-    Rf = _rot_z_stack(inp.foot_yaw)  # (N, 2, 3, 3)
-    Tw = np.empty((N, 2, 3, 5))
-    # column j of skew(r) Rf is r x Rf[:, j]
-    Tw[..., 0:3] = np.swapaxes(np.cross(r[:, :, None, :], np.swapaxes(Rf, -1, -2)), -1, -2)
-    Tw[..., 3:5] = Rf[..., 1:3]
-    stance = inp.contact.astype(np.float64)[:, :, None, None]
-    Phi4 = np.zeros((N, 2, 6, 5))
-    Phi4[:, :, 0:3, :] = dt * np.einsum("kij,kfja->kfia", Iinv, Tw) * stance
-    Phi4[:, :, 3:6, 0:3] = (dt / mass)[:, None, None, None] * Rf * stance
-    Phi = np.ascontiguousarray(Phi4.transpose(0, 2, 1, 3).reshape(N, 6, 10))
+    rx, ry, rz = r[..., 0], r[..., 1], r[..., 2]
+    c, s = np.cos(inp.foot_yaw), np.sin(inp.foot_yaw)
+    zero = np.zeros_like(c)
+    one = np.ones_like(c)
+    # Columns: r x e1', r x e2', r x e3 (force part of skew(r) R_f), then e2', e3 (moments).
+    Tw = np.stack(
+        [
+            np.stack([-rz * s, -rz * c, ry, -s, zero], axis=-1),
+            np.stack([rz * c, -rz * s, -rx, c, zero], axis=-1),
+            np.stack([rx * s - ry * c, rx * c + ry * s, zero, zero, one], axis=-1),
+        ],
+        axis=2,
+    )
+    Rf = np.stack(
+        [np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)],
+        axis=2,
+    )
+    stance = inp.contact.astype(np.float64)
+    Phi4 = np.zeros((N, 6, 2, 5))
+    Phi4[:, 0:3] = np.swapaxes((dt * Iinv)[:, None] @ Tw, 1, 2)
+    Phi4[:, 3:6, :, 0:3] = np.swapaxes((dt / mass)[:, None, None, None] * Rf, 1, 2)
+    Phi4 *= stance[:, None, :, None]
+    Phi = Phi4.reshape(N, 6, 10)
     cols = np.flatnonzero(np.repeat(inp.contact.reshape(-1), 5))
-    return _StepTerms(Iinv=Iinv, mass=mass, tau_ext=tau_ext, f_ext=f_ext, Tw=Tw, Rf=Rf,
-                      Phi=Phi, cols=cols)  # fmt: skip
+    return _StepTerms(
+        Iinv=Iinv, mass=mass, tau_ext=tau_ext, f_ext=f_ext, Tw=Tw, Rf=Rf, Phi=Phi, cols=cols
+    )
 
 
 def propagate(
@@ -357,20 +400,20 @@ def propagate(
     RzT: FloatArray,
     Iinv: FloatArray,
     mass: FloatArray,
-    tau: FloatArray,
-    force: FloatArray,
+    tau: FloatArray | None,
+    force: FloatArray | None,
     dt: float,
 ) -> FloatArray:
     """Exact ZOH rollout x_1..x_N (N, 15) of the SRBD under known per-step wrenches.
 
     x0 (15,), RzT (N, 3, 3) = R_z(yaw_lin_k)^T, Iinv (N, 3, 3) world inverse inertia (kg^-1
     m^-2), mass (N,) (kg), tau (N, 3) the torque about the CoM (N m) and force (N, 3) the
-    contact plus external force (N), both world and constant over each step.
+    contact plus external force (N), both world and constant over each step (None: zero).
     """
-    N = tau.shape[0]
+    N = RzT.shape[0]
     g0 = x0[srbd.GRAV]
-    a_w = dt * np.einsum("kij,kj->ki", Iinv, tau)
-    a_v = dt * (force / mass[:, None] + g0)
+    a_w = np.zeros((N, 3)) if tau is None else dt * np.einsum("kij,kj->ki", Iinv, tau)
+    a_v = np.broadcast_to(dt * g0, (N, 3)) if force is None else dt * (force / mass[:, None] + g0)
     Om = np.cumsum(a_w, axis=0)
     V = np.cumsum(a_v, axis=0)
     X = np.empty((N, srbd.NX))
@@ -419,28 +462,20 @@ class MultiContactMpc:
         self._rows, self._lo, self._hi = _wrench_rows(s)
         self._kernel_key: bytes | None = None
         self._kernel: _Kernel | None = None
-        self._ib_key: bytes | None = None
-        self._ib_inv: FloatArray = np.eye(3)
         self._cons_cache: dict[tuple[int, float, float], tuple[FloatArray, ...]] = {}
         self._prev_U: FloatArray | None = None
         self._prev_contact: BoolArray | None = None
 
     # --- caches ----------------------------------------------------------------------------
 
-    def _get_kernel(self, yaw_lin: FloatArray) -> _Kernel:
-        key = yaw_lin.tobytes()
+    def _get_kernel(self, yaw_lin: FloatArray, Ib: FloatArray) -> _Kernel:
+        key = yaw_lin.tobytes() + Ib.tobytes()
         if self._kernel is None or key != self._kernel_key:
             s = self.settings
-            self._kernel = _build_kernel(s.horizon, s.dt, self._q, yaw_lin)
+            Ib_inv = np.asarray(np.linalg.inv(Ib), dtype=np.float64)
+            self._kernel = _build_kernel(s.horizon, s.dt, self._q, yaw_lin, Ib_inv)
             self._kernel_key = key
         return self._kernel
-
-    def _get_ib_inv(self, Ib: FloatArray) -> FloatArray:
-        key = Ib.tobytes()
-        if key != self._ib_key:
-            self._ib_inv = np.asarray(np.linalg.inv(Ib), dtype=np.float64)
-            self._ib_key = key
-        return self._ib_inv
 
     def _constraints(self, n_fs: int, f_min: float, f_max: float) -> tuple[FloatArray, ...]:
         """(C, l, u, x_lower, x_upper) for n_fs stance foot-steps, cached."""
@@ -461,9 +496,14 @@ class MultiContactMpc:
     # --- problem construction --------------------------------------------------------------
 
     def _condensed(
-        self, inp: MpcInput, st: _StepTerms, kern: _Kernel, x_free: FloatArray,
-        f_min: float, f_max: float,
-    ) -> QpProblem:  # fmt: skip
+        self,
+        inp: MpcInput,
+        st: _StepTerms,
+        kern: _Kernel,
+        x_free: FloatArray,
+        f_min: float,
+        f_max: float,
+    ) -> QpProblem:
         s = self.settings
         N, dt, q = s.horizon, s.dt, self._q
         Phi = st.Phi
@@ -486,7 +526,7 @@ class MultiContactMpc:
         g = np.einsum("kia,ki->ka", Phi, lam).reshape(-1)
         cols = st.cols
         if cols.shape[0] != 10 * N:
-            H = H[np.ix_(cols, cols)]
+            H = H.take(cols, axis=0).take(cols, axis=1)
             g = g[cols]
         C, l, u, lb, ub = self._constraints(cols.shape[0] // 5, f_min, f_max)
         return QpProblem(H=H, g=g, C=C, l=l, u=u, x_lower=lb, x_upper=ub)
@@ -511,8 +551,11 @@ class MultiContactMpc:
         B12[:, 9:12] = Phi[:, 3:6]
         # Affine part of each step: gravity and the known external wrench.
         g0 = inp.x0[srbd.GRAV]
-        a_w = dt * np.einsum("kij,kj->ki", st.Iinv, st.tau_ext)
-        a_v = dt * (st.f_ext / st.mass[:, None] + g0)
+        a_w = np.zeros((N, 3))
+        a_v = np.broadcast_to(dt * g0, (N, 3))
+        if st.tau_ext is not None and st.f_ext is not None:
+            a_w = dt * np.einsum("kij,kj->ki", st.Iinv, st.tau_ext)
+            a_v = dt * (st.f_ext / st.mass[:, None] + g0)
         c = np.zeros((N, nxr))
         c[:, 0:3] = 0.5 * dt * np.einsum("kij,kj->ki", kern.RzT, a_w)
         c[:, 3:6] = 0.5 * dt * a_v
@@ -566,17 +609,28 @@ class MultiContactMpc:
         if inp.horizon != s.horizon:
             raise ValueError(f"MpcInput horizon {inp.horizon} != settings.horizon {s.horizon}")
         t0 = time.perf_counter()
-        kern = self._get_kernel(np.ascontiguousarray(inp.yaw_lin, dtype=np.float64))
-        Ib = np.asarray(inp.inertia_body, dtype=np.float64)
-        st = _step_terms(inp, s.dt, self._get_ib_inv(Ib), Ib)
+        Ib = np.ascontiguousarray(inp.inertia_body, dtype=np.float64)
+        kern = self._get_kernel(np.ascontiguousarray(inp.yaw_lin, dtype=np.float64), Ib)
+        st = _step_terms(inp, s.dt, kern.Iinv, Ib)
         x_free = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, st.tau_ext, st.f_ext, s.dt)
         N = s.horizon
         nu = st.cols.shape[0]
         if nu == 0:
             U = np.zeros((N, 2, 5))
             zeros = np.zeros((2, 3))
-            return MpcSolution(True, "no_contact", "none", zeros, zeros.copy(), U, x_free,
-                               time.perf_counter() - t0, 0.0, 0, None)  # fmt: skip
+            return MpcSolution(
+                True,
+                "no_contact",
+                "none",
+                zeros,
+                zeros.copy(),
+                U,
+                x_free,
+                time.perf_counter() - t0,
+                0.0,
+                0,
+                None,
+            )
         qp = self._problem(inp, st, kern, x_free, s.f_min, s.f_max)
         t1 = time.perf_counter()
         sol = self._solver.solve(qp)
@@ -591,7 +645,8 @@ class MultiContactMpc:
                 raise SolverFailure(inp.t, "mpc", s.backend, sol.status)
             t3 = time.perf_counter()
             relaxed_qp = self._problem(inp, st, kern, x_free, 0.0, max(s.f_max, s.f_min))
-            relaxed = QpSolver(s.backend, _relaxed_settings(s.qp)).solve(relaxed_qp)
+            relaxed_settings = s.relaxed_qp if s.relaxed_qp is not None else _relaxed(s.qp)
+            relaxed = QpSolver(s.backend, relaxed_settings).solve(relaxed_qp)
             solve_time += relaxed.solve_time_s
             outside += time.perf_counter() - t3 - relaxed.solve_time_s
             if relaxed.ok:
@@ -628,9 +683,14 @@ class MultiContactMpc:
         )
 
     def _problem(
-        self, inp: MpcInput, st: _StepTerms, kern: _Kernel, x_free: FloatArray,
-        f_min: float, f_max: float,
-    ) -> QpProblem:  # fmt: skip
+        self,
+        inp: MpcInput,
+        st: _StepTerms,
+        kern: _Kernel,
+        x_free: FloatArray,
+        f_min: float,
+        f_max: float,
+    ) -> QpProblem:
         if self.settings.formulation == "sparse":
             return self._sparse(inp, st, kern, f_min, f_max)
         return self._condensed(inp, st, kern, x_free, f_min, f_max)
@@ -640,8 +700,11 @@ class MultiContactMpc:
     ) -> tuple[FloatArray, FloatArray]:
         """U in the output convention and the predicted states from the foot-frame wrenches."""
         F_world = np.einsum("kfij,kfj->kfi", st.Rf, U_foot[..., 0:3])
-        tau = np.einsum("kfia,kfa->ki", st.Tw, U_foot) + st.tau_ext
-        force = F_world.sum(axis=1) + st.f_ext
+        tau = np.einsum("kfia,kfa->ki", st.Tw, U_foot)
+        force = F_world.sum(axis=1)
+        if st.tau_ext is not None and st.f_ext is not None:
+            tau += st.tau_ext
+            force += st.f_ext
         X = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, tau, force, self.settings.dt)
         U = np.concatenate([F_world, U_foot[..., 3:5]], axis=2)
         return U, X
@@ -665,19 +728,14 @@ class MultiContactMpc:
         return U
 
 
-def _relaxed_settings(qp: QpSettings) -> QpSettings:
-    """Settings for the relaxed retry: cold, more iterations, the solver's own equilibration."""
-    return QpSettings(
-        eps_abs=qp.eps_abs,
-        eps_rel=qp.eps_rel,
-        check_duality_gap=qp.check_duality_gap,
-        eps_gap_abs=qp.eps_gap_abs,
-        eps_gap_rel=qp.eps_gap_rel,
+def _relaxed(qp: QpSettings) -> QpSettings:
+    """Settings for the relaxed retry: cold, 5x the iterations, the backend's own equilibration."""
+    return replace(
+        qp,
         max_iter=5 * qp.max_iter,
         warm_start=False,
+        preconditioner=True,
         update_preconditioner=True,
         scaling=True,
-        preconditioner=True,
-        unconstrained_first=False,
-        eps_primal_inf=qp.eps_primal_inf,
+        active_set_iter=0,
     )

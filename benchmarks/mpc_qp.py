@@ -1,0 +1,201 @@
+"""Benchmark of one MPC update (build + solve) at horizon 20, per backend and formulation.
+
+Run: OMP_NUM_THREADS=1 .venv/bin/python benchmarks/mpc_qp.py [--updates 300] [--quick]
+
+Inputs are realistic: they are recorded from a closed loop in which the SRBD itself is the
+plant (17 kg, trunk inertia diag(0.17, 0.15, 0.06) or the composite one with pitch 0.59, feet
+at +-0.1 m lateral, CoM 0.55 m high), the MPC re-solved every 10 ms and its first-step wrench
+applied, with a small random disturbance force. Two schedules: standing (both feet) and
+stepping in place (0.4 s gait, 0.05 s double support, 0.15 s swing per foot). Every
+combination then replays the same recorded inputs in order, on a fresh controller, so solver
+re-use and caches behave as in the loop.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from locoplan.control import srbd
+from locoplan.control.mpc import MpcInput, MpcSettings, MultiContactMpc
+from locoplan.control.qp import QpSettings
+
+N = 20
+DT = 0.03
+MASS = 17.0
+INERTIA_TRUNK = np.diag([0.17, 0.15, 0.06])
+INERTIA_COMPOSITE = np.diag([0.62, 0.59, 0.12])
+Z_COM = 0.55
+P_FEET = np.array([[0.0, 0.1, 0.0], [0.0, -0.1, 0.0]])
+
+
+def standing_contact(t: np.ndarray) -> np.ndarray:
+    """Both feet down at every time t (n,) -> (n, 2) bool."""
+    return np.ones((t.shape[0], 2), dtype=bool)
+
+
+def stepping_contact(t: np.ndarray) -> np.ndarray:
+    """Step in place: period 0.4 s, 0.05 s double support, 0.15 s swing per foot."""
+    ph = np.mod(t, 0.4)
+    left = ~((ph >= 0.05) & (ph < 0.2))
+    right = ~((ph >= 0.25) & (ph < 0.4))
+    return np.stack([left, right], axis=1)
+
+
+def reference_state() -> np.ndarray:
+    x = np.zeros(15)
+    x[srbd.POS] = [0.0, 0.0, Z_COM]
+    x[srbd.GRAV] = srbd.gravity_state()
+    return x
+
+
+def make_input(
+    t: float,
+    x0: np.ndarray,
+    schedule: Callable[[np.ndarray], np.ndarray],
+    inertia: np.ndarray,
+    object_mass: float = 0.0,
+) -> MpcInput:
+    """The MPC input at time t (s) for state x0 (15,) and the given contact schedule."""
+    times = t + DT * np.arange(N)
+    x_ref = np.tile(reference_state(), (N, 1))
+    held = np.full(N, object_mass > 0.0)
+    return MpcInput(
+        x0=x0,
+        x_ref=x_ref,
+        contact=schedule(times),
+        p_feet=np.tile(P_FEET, (N, 1, 1)),
+        foot_yaw=np.zeros((N, 2)),
+        yaw_lin=np.zeros(N),
+        mass=MASS,
+        inertia_body=inertia,
+        object_held=held,
+        object_mass=object_mass,
+        p_object=np.tile([0.3, 0.0, Z_COM], (N, 1)),
+    )
+
+
+def record_inputs(
+    schedule: Callable[[np.ndarray], np.ndarray],
+    n_updates: int,
+    inertia: np.ndarray = INERTIA_TRUNK,
+    seed: int = 0,
+    period: float = 0.01,
+    noise: float = 1.0,
+) -> list[MpcInput]:
+    """Closed loop with the SRBD as plant; returns the MPC inputs met along the way.
+
+    The MPC sees the state plus Gaussian noise of standard deviation ``noise`` x (0.5 deg,
+    5 mm, 0.1 rad/s, 0.05 m/s) -- the size of the errors a whole-body loop leaves -- which
+    makes a third to a half of the QPs have active constraints; with noise 0 almost none do.
+    """
+    rng = np.random.default_rng(seed)
+    mpc = MultiContactMpc(MpcSettings())
+    x = reference_state()
+    inputs: list[MpcInput] = []
+    sigma = noise * np.repeat([np.radians(0.5), 0.005, 0.1, 0.05], 3)
+    for i in range(n_updates):
+        t = i * period
+        x_meas = x.copy()
+        x_meas[:12] += sigma * rng.normal(size=12)
+        inp = make_input(t, x_meas, schedule, inertia)
+        inputs.append(inp)
+        sol = mpc.update(inp)
+        contact = schedule(np.array([t]))[0]
+        u = np.concatenate([sol.U[0, 0, 0:3], sol.U[0, 1, 0:3], sol.U[0, 0, 3:5], sol.U[0, 1, 3:5]])
+        cm = srbd.continuous_model(0.0, x[srbd.POS], P_FEET, np.zeros(2), contact, MASS, inertia)
+        dm = srbd.discretize(cm, period)
+        x = dm.A @ x + dm.B @ u + dm.d
+        # Disturbance: a random push of a few newtons on the CoM over the period.
+        x[srbd.VEL] += rng.normal(scale=3.0, size=3) * period / MASS
+    return inputs
+
+
+def time_updates(settings: MpcSettings, inputs: list[MpcInput]) -> dict[str, np.ndarray]:
+    """Replay inputs through a fresh controller; per-update times (us) and counters."""
+    mpc = MultiContactMpc(settings)
+    mpc.update(inputs[0])  # the first update sets up caches and the solver object
+    total, build, solve, iters, unc = [], [], [], [], []
+    fallbacks = 0
+    for inp in inputs:
+        t0 = time.perf_counter()
+        sol = mpc.update(inp)
+        total.append(time.perf_counter() - t0)
+        build.append(sol.build_time_s)
+        solve.append(sol.solve_time_s)
+        iters.append(sol.iterations)
+        unc.append(sol.qp is not None and sol.qp.active_set)
+        fallbacks += sol.fallback != "none"
+    return {
+        "total": np.array(total) * 1e6,
+        "build": np.array(build) * 1e6,
+        "solve": np.array(solve) * 1e6,
+        "iters": np.array(iters),
+        "active_set": np.array(unc),
+        "fallbacks": np.array([fallbacks]),
+    }
+
+
+def combinations(quick: bool) -> list[tuple[str, MpcSettings]]:
+    """Named settings to compare; the first is the default."""
+    base = MpcSettings()
+    out = [("condensed proxsuite (default)", base)]
+    plain = replace(base.qp, active_set_iter=0)
+    out.append(("condensed proxsuite, backend only", replace(base, qp=plain)))
+    out.append(
+        ("condensed proxsuite, warm start", replace(base, qp=replace(plain, warm_start=True)))
+    )
+    pre = replace(plain, scaling=False, preconditioner=True)
+    out.append(("condensed proxsuite, its own preconditioner", replace(base, qp=pre)))
+    out.append(("condensed piqp", replace(base, backend="piqp")))
+    out.append(("condensed piqp, backend only", replace(base, backend="piqp", qp=plain)))
+    if not quick:
+        sparse_qp = QpSettings(eps_abs=1e-6, eps_gap_abs=1e-6, max_iter=100, eps_primal_inf=1e-9)
+        out.append(
+            ("sparse piqp", replace(base, formulation="sparse", backend="piqp", qp=sparse_qp))
+        )
+        out.append(("sparse proxsuite", replace(base, formulation="sparse", qp=sparse_qp)))
+    return out
+
+
+def _fmt(a: np.ndarray) -> str:
+    return f"{np.median(a):7.0f} / {np.percentile(a, 99):6.0f}"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--updates", type=int, default=300)
+    ap.add_argument("--quick", action="store_true", help="skip the slow sparse formulations")
+    ap.add_argument("--composite", action="store_true", help="composite inertia (pitch 0.59)")
+    ap.add_argument("--noise", type=float, default=1.0, help="state noise level (see record)")
+    args = ap.parse_args()
+    if os.environ.get("OMP_NUM_THREADS") != "1":
+        print("warning: set OMP_NUM_THREADS=1 for single-core figures")
+    inertia = INERTIA_COMPOSITE if args.composite else INERTIA_TRUNK
+    scenarios = {
+        "standing": record_inputs(standing_contact, args.updates, inertia, noise=args.noise),
+        "stepping": record_inputs(stepping_contact, args.updates, inertia, noise=args.noise),
+    }
+    print(
+        f"horizon {N}, dt {DT}, {args.updates} updates per scenario, noise {args.noise}, "
+        f"inertia diag{tuple(np.diag(inertia))}; times in us, median / p99"
+    )
+    header = f"{'combination':46s} {'scenario':9s} {'build':>16s} {'solve':>16s} {'total':>16s}"
+    print(header + "  iters(med/max) act.set fallbacks")
+    for name, settings in combinations(args.quick):
+        for scen, inputs in scenarios.items():
+            r = time_updates(settings, inputs)
+            print(
+                f"{name:46s} {scen:9s} {_fmt(r['build'])} {_fmt(r['solve'])} {_fmt(r['total'])}"
+                f"  {np.median(r['iters']):4.0f}/{r['iters'].max():3d}"
+                f"  {100 * r['active_set'].mean():5.1f}%  {int(r['fallbacks'][0])}"
+            )
+
+
+if __name__ == "__main__":
+    main()

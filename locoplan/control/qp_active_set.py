@@ -1,0 +1,204 @@
+"""Dense dual active-set QP method (Goldfarb & Idnani 1983), numpy only.
+
+Solves ``min 1/2 x'Hx + g'x`` s.t. ``l <= C x <= u`` and ``x_lower <= x <= x_upper`` for a
+positive definite H. It starts at the unconstrained minimiser -H^-1 g (one Cholesky
+factorisation) and adds the most violated constraint one at a time, dropping constraints
+whose multiplier would turn negative; every iterate is dual feasible, and the method stops
+when the primal iterate meets every bound to ``tol``: that point satisfies the KKT conditions
+(stationarity by construction, multipliers >= 0, complementarity, primal feasibility to tol).
+One iteration costs one triangular solve pair with H's factor (O(n^2)) plus O(n m) with m
+active constraints, so a problem whose optimum has few active constraints -- the usual MPC
+case -- costs little more than the factorisation, unlike interior-point or augmented
+Lagrangian methods that refactorise at every iteration.
+
+Internally the constraints are one-sided, n_i' x >= b_i: a lower bound l_j gives
+(C_j, l_j), an upper bound u_j gives (-C_j, -u_j), likewise for the box. With the active set
+A, V = H^-1 N_A and S = N_A' V, adding constraint p moves the primal iterate along
+z = H^-1 n_p - V S^-1 V' n_p (which keeps the active constraints exact) and the active
+multipliers along -r, r = S^-1 V' n_p.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import scipy.linalg
+
+FloatArray = npt.NDArray[np.float64]
+
+_potrf = scipy.linalg.get_lapack_funcs("potrf", dtype=np.float64)
+_trsv = scipy.linalg.get_blas_funcs("trsv", dtype=np.float64)
+
+
+def _chol_solve(U: FloatArray, b: FloatArray) -> FloatArray:
+    """H^-1 b from the upper Cholesky factor U (H = U'U), two BLAS triangular solves (faster
+    than LAPACK potrs for one right-hand side at this size)."""
+    return np.asarray(_trsv(U, _trsv(U, b, trans=1), trans=0))
+
+
+@dataclass(frozen=True, slots=True)
+class ActiveSetResult:
+    """Outcome of `solve_dual_active_set`.
+
+    ``status``: "solved", "max_iterations", "infeasible" or "not_positive_definite". ``x``
+    (n,) the last iterate. ``iterations``: constraints added plus dropped. ``z_in`` (m_in,)
+    and ``z_box`` (n,) multipliers with H x + g + C' z_in + z_box = 0 (positive on an active
+    upper bound, negative on an active lower bound). ``max_violation`` of the bounds at x.
+    """
+
+    status: str
+    x: FloatArray
+    iterations: int
+    n_active: int
+    z_in: FloatArray
+    z_box: FloatArray
+    max_violation: float
+
+
+def solve_dual_active_set(
+    H: FloatArray,
+    g: FloatArray,
+    C: FloatArray | None = None,
+    l: FloatArray | None = None,
+    u: FloatArray | None = None,
+    x_lower: FloatArray | None = None,
+    x_upper: FloatArray | None = None,
+    tol: float = 1e-9,
+    max_iter: int = 50,
+) -> ActiveSetResult:
+    """Solve the QP by the dual active-set method; see the module docstring.
+
+    H (n, n) positive definite, g (n,), C (m, n) with l/u (m,), box x_lower/x_upper (n,);
+    +-inf or None for absent bounds. ``tol`` is the accepted bound violation, ``max_iter``
+    caps the iterations (the result is then "max_iterations" and x is not optimal).
+    """
+    n = g.shape[0]
+    m = 0 if C is None else C.shape[0]
+    # Rows j < m are C's, rows m + i the box on x_i; one-sided constraint id j is the lower
+    # bound of row j, id (m + n) + j its upper bound.
+    mn = m + n
+    lo = np.full(mn, -np.inf)
+    hi = np.full(mn, np.inf)
+    if l is not None:
+        lo[:m] = l
+    if u is not None:
+        hi[:m] = u
+    if x_lower is not None:
+        lo[m:] = x_lower
+    if x_upper is not None:
+        hi[m:] = x_upper
+    factor, info = _potrf(H, lower=0, clean=0, overwrite_a=0)
+    if info != 0:
+        nan = np.full(n, np.nan)
+        return ActiveSetResult("not_positive_definite", nan, 0, 0, np.zeros(m), np.zeros(n), np.inf)
+    x = -_chol_solve(factor, g)
+    rows = np.empty(mn)
+
+    def slacks(x: FloatArray) -> FloatArray:
+        if C is not None:
+            rows[:m] = C @ x
+        rows[m:] = x
+        return np.concatenate((rows - lo, hi - rows))
+
+    def normal(i: int) -> FloatArray:
+        j = i if i < mn else i - mn
+        if j < m:
+            assert C is not None
+            n_j = C[j]
+        else:
+            n_j = np.zeros(n)
+            n_j[j - m] = 1.0
+        return n_j if i < mn else -n_j
+
+    active: list[int] = []
+    lam = np.zeros(0)
+    V = np.zeros((n, 0))  # H^-1 N_A
+    Sinv = np.zeros((0, 0))  # (N_A' H^-1 N_A)^-1, kept by bordering and its inverse
+    iterations = 0
+    status = "max_iterations"
+    s = slacks(x)
+    while True:
+        p = int(np.argmin(s))
+        if not s[p] < -tol:
+            status = "solved"
+            break
+        if iterations >= max_iter:
+            break
+        n_p = normal(p)
+        v = _chol_solve(factor, n_p)
+        vn = float(v @ n_p)
+        lam_p = 0.0
+        s_p = float(s[p])
+        added = False
+        while not added:
+            if iterations >= max_iter:
+                break
+            iterations += 1
+            if active:
+                b = n_p @ V
+                r = Sinv @ b
+                z = v - V @ r
+                zn = vn - float(b @ r)
+            else:
+                b = r = np.zeros(0)
+                z = v
+                zn = vn
+            # Full step: makes constraint p exact. Below this curvature z is taken as zero
+            # (n_p depends linearly on the active normals).
+            t2 = -s_p / zn if zn > 1e-12 * vn else np.inf
+            k, t1 = -1, np.inf
+            pos = np.flatnonzero(r > 0.0)
+            if pos.shape[0]:
+                ratios = lam[pos] / r[pos]
+                j = int(np.argmin(ratios))
+                k, t1 = int(pos[j]), float(ratios[j])
+            t = min(t1, t2)
+            if not t < np.inf:
+                return ActiveSetResult(
+                    "infeasible", x, iterations, len(active), np.zeros(m), np.zeros(n), float(-s[p])
+                )
+            if t2 < np.inf:
+                x = x + t * z
+                s_p += t * zn
+            lam = lam - t * r
+            lam_p += t
+            if t2 <= t1:
+                # Add p. Bordering: with w = S^-1 b = r and delta = zn,
+                # [[S, b], [b', c]]^-1 = [[S^-1 + r r'/delta, -r/delta], [-r'/delta, 1/delta]].
+                q = Sinv.shape[0]
+                Sn = np.empty((q + 1, q + 1))
+                Sn[:q, :q] = Sinv + np.outer(r, r) / zn
+                Sn[:q, q] = Sn[q, :q] = -r / zn
+                Sn[q, q] = 1.0 / zn
+                Sinv = Sn
+                Vn = np.empty((n, q + 1))
+                Vn[:, :q] = V
+                Vn[:, q] = v
+                V = Vn
+                lam = np.append(lam, lam_p)
+                active.append(p)
+                added = True
+            else:
+                # Drop the active constraint whose multiplier reached zero; keep adding p.
+                # Inverse of S without row/column k: M_-k,-k - M_-k,k M_k,-k / M_kk.
+                keep = np.arange(Sinv.shape[0]) != k
+                col = Sinv[keep, k]
+                Sinv = Sinv[np.ix_(keep, keep)] - np.outer(col, col) / Sinv[k, k]
+                del active[k]
+                lam = lam[keep]
+                V = V[:, keep]
+        if not added:
+            break
+        s = slacks(x)
+    # Multipliers in the H x + g + C' z_in + z_box = 0 convention: a lower bound's normal is
+    # +row, its multiplier enters with a minus sign; an upper bound's with a plus sign.
+    z_rows = np.zeros(mn)
+    for i, lam_i in zip(active, lam, strict=True):
+        if i < mn:
+            z_rows[i] -= lam_i
+        else:
+            z_rows[i - mn] += lam_i
+    viol = float(max(0.0, -float(np.min(slacks(x)))))
+    return ActiveSetResult(status, x, iterations, len(active), z_rows[:m], z_rows[m:], viol)

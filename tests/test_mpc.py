@@ -1,0 +1,297 @@
+"""Tests of locoplan.control.mpc: prediction, statics, CoP sign, constraints, agreement between
+formulations and backends, failure handling."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from locoplan.control import srbd
+from locoplan.control.mpc import MpcInput, MpcSettings, MultiContactMpc
+from locoplan.control.qp import QpSettings
+from locoplan.exceptions import SolverFailure
+
+N = 20
+MASS = 17.0
+INERTIA = np.diag([0.17, 0.15, 0.06])
+G = srbd.GRAVITY
+Z = 0.55
+FEET_SIDE = np.array([[0.0, 0.1, 0.0], [0.0, -0.1, 0.0]])
+TIGHT = QpSettings(eps_abs=1e-10, eps_gap_abs=1e-10, max_iter=500, scaling=True)
+
+
+def make_input(
+    x_com: float = 0.0,
+    feet: np.ndarray = FEET_SIDE,
+    contact: np.ndarray | None = None,
+    object_mass: float = 0.0,
+    p_object: tuple[float, float, float] = (0.3, 0.0, 0.6),
+    yaw_rate: float = 0.0,
+    v0: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    model: str = "external-force",
+) -> MpcInput:
+    """At rest at the reference (CoM x_com ahead of the ankles), unless v0 pushes it."""
+    x0 = np.zeros(15)
+    x0[srbd.POS] = [x_com, 0.0, Z]
+    x0[srbd.GRAV] = srbd.gravity_state()
+    x_ref = np.tile(x0, (N, 1))
+    yaw = yaw_rate * 0.03 * np.arange(1, N + 1)
+    x_ref[:, 2] = yaw
+    x_ref[:, 8] = yaw_rate
+    x0[srbd.VEL] = v0
+    return MpcInput(
+        x0=x0,
+        x_ref=x_ref,
+        contact=np.ones((N, 2), dtype=bool) if contact is None else contact,
+        p_feet=np.tile(feet, (N, 1, 1)),
+        foot_yaw=np.tile(np.r_[0.0, 0.0] if yaw_rate == 0 else [0.3, 0.4], (N, 1)),
+        yaw_lin=np.r_[0.0, yaw[:-1]],
+        mass=MASS,
+        inertia_body=INERTIA,
+        object_held=np.full(N, object_mass > 0),
+        object_mass=object_mass,
+        p_object=np.tile(p_object, (N, 1)),
+        model=model,
+    )
+
+
+def stepping_contact() -> np.ndarray:
+    t = 0.03 * np.arange(N)
+    ph = np.mod(t, 0.4)
+    return np.stack([~((ph >= 0.05) & (ph < 0.2)), ~((ph >= 0.25) & (ph < 0.4))], axis=1)
+
+
+def net_moment_about_com(inp: MpcInput, U0: np.ndarray) -> np.ndarray:
+    """Moment (3,) about the CoM of the first step's foot wrenches and the held load."""
+    p_c = inp.x0[srbd.POS]
+    total = np.zeros(3)
+    for f in range(2):
+        R = srbd.rot_z(float(inp.foot_yaw[0, f]))
+        total += np.cross(inp.p_feet[0, f] - p_c, U0[f, 0:3])
+        total += R @ srbd.L_SELECT @ U0[f, 3:5]
+    m_o = float(np.asarray(inp.object_mass))
+    if inp.object_held[0] and m_o > 0 and inp.p_object is not None:
+        total += np.cross(inp.p_object[0] - p_c, [0.0, 0.0, -m_o * G])
+    return total
+
+
+def rollout_with(inp: MpcInput, U: np.ndarray) -> np.ndarray:
+    """x_1..x_N by srbd.rollout with the returned U (the reference model, one step at a time)."""
+    models = []
+    u = np.zeros((N, 10))
+    for k in range(N):
+        p_c = inp.x0[srbd.POS] if k == 0 else inp.x_ref[k - 1, srbd.POS]
+        cm = srbd.continuous_model(
+            float(inp.yaw_lin[k]),
+            p_c,
+            inp.p_feet[k],
+            inp.foot_yaw[k],
+            inp.contact[k],
+            inp.mass,
+            inp.inertia_body,
+            bool(inp.object_held[k]),
+            float(np.asarray(inp.object_mass)),
+            None if inp.p_object is None else inp.p_object[k],
+            inp.model,
+        )
+        models.append(srbd.discretize(cm, 0.03))
+        u[k] = srbd.input_vector(U[k, :, 0:3], U[k, :, 3:5])
+    return srbd.rollout(models, inp.x0, u)
+
+
+@pytest.mark.parametrize("model", ["external-force", "combined"])
+@pytest.mark.parametrize("formulation", ["condensed", "sparse"])
+def test_prediction_is_the_rollout_of_the_returned_inputs(model: str, formulation: str) -> None:
+    inp = make_input(
+        contact=stepping_contact(),
+        object_mass=3.0,
+        yaw_rate=0.5,
+        v0=(0.1, -0.05, 0.0),
+        model=model,
+    )
+    sol = MultiContactMpc(MpcSettings(formulation=formulation)).update(inp)
+    assert sol.ok
+    # Both sides are exact ZOH of the same linear model; 1e-9 covers rounding on states <= 10.
+    np.testing.assert_allclose(sol.X, rollout_with(inp, sol.U), rtol=0, atol=1e-9)
+
+
+def test_static_double_stance_at_rest() -> None:
+    inp = make_input()
+    sol = MultiContactMpc().update(inp)
+    assert sol.ok and sol.fallback == "none"
+    F = sol.forces_world
+    # R = 1e-4 pulls every force towards zero and the state cost resists a deficit only
+    # through the sag it causes over the horizon, so the optimum under-supports by a fraction
+    # of a newton (0.29 N measured); 1 N = 0.6 % of m g bounds that.
+    assert abs(F[:, 2].sum() - MASS * G) < 1.0
+    # Symmetric problem: equal split to solver accuracy (eps 1e-6 on scaled residuals).
+    assert abs(F[0, 2] - F[1, 2]) < 1e-4
+    np.testing.assert_allclose(F[:, 0:2], 0.0, atol=1e-6)
+    for f in range(2):
+        My = sol.U[0, f, 3]
+        assert -0.09 * F[f, 2] - 1e-9 <= My <= 0.06 * F[f, 2] + 1e-9
+    # At rest at the reference nothing asks for a moment: |M| below 1e-6 N m.
+    np.testing.assert_allclose(sol.moments_world, 0.0, atol=1e-6)
+    np.testing.assert_allclose(net_moment_about_com(inp, sol.U[0]), 0.0, atol=1e-6)
+
+
+def test_held_object_model2_loads_the_toes() -> None:
+    m_o, d = 3.0, 0.3
+    inp = make_input(object_mass=m_o, p_object=(d, 0.0, 0.6))
+    sol = MultiContactMpc().update(inp)
+    assert sol.ok
+    F = sol.forces_world
+    # Same 1 N bound as the static test (measured deficit 0.34 N with the load).
+    assert abs(F[:, 2].sum() - (MASS + m_o) * G) < 1.0
+    # Toe loading: My < 0, and the centre of pressure moves forward by m_o d / (m + m_o),
+    # which balances the load's moment about the CoM. 1 mm covers the force deficit above.
+    x_cop = -sol.U[0, :, 3] / F[:, 2]
+    assert np.all(sol.U[0, :, 3] < 0)
+    np.testing.assert_allclose(x_cop, m_o * d / (MASS + m_o), atol=1e-3)
+    # Static equilibrium about the CoM: a residual below 0.1 N m (0.34 N deficit x 0.3 m lever
+    # at most) means the feet balance the load's 8.8 N m.
+    assert np.linalg.norm(net_moment_about_com(inp, sol.U[0])) < 0.1
+
+
+def test_held_object_staggered_feet_combined_cop_under_load_shift() -> None:
+    m_o, d = 3.0, 0.3
+    feet = np.array([[0.08, 0.1, 0.0], [-0.08, -0.1, 0.0]])
+    inp = make_input(feet=feet, object_mass=m_o, p_object=(d, 0.0, 0.6))
+    sol = MultiContactMpc().update(inp)
+    F, My = sol.forces_world, sol.U[0, :, 3]
+    # Combined CoP of both feet (vertical forces and ankle moments) sits m_o d / (m + m_o)
+    # ahead of the CoM: the support shifts towards the front foot/toes (1 mm as above).
+    x_cop = float((feet[:, 0] @ F[:, 2] - My.sum()) / F[:, 2].sum())
+    assert x_cop == pytest.approx(m_o * d / (MASS + m_o), abs=1e-3)
+    assert np.linalg.norm(net_moment_about_com(inp, sol.U[0])) < 0.1
+
+
+def test_cop_sign_com_ahead_of_feet() -> None:
+    # CoM 3 cm ahead of the ankles: gravity tips the robot forward, so the feet must push
+    # at the toes. The moment on the robot is My = -x_cop Fz < 0 with x_cop = +0.03.
+    inp = make_input(x_com=0.03)
+    sol = MultiContactMpc().update(inp)
+    U0 = sol.U[0]
+    assert np.all(U0[:, 3] < 0.0)
+    np.testing.assert_allclose(-U0[:, 3] / U0[:, 2], 0.03, atol=1e-3)
+    # Physics: the wrench's net moment about the CoM vanishes (static balance). With the
+    # opposite sign convention it would double instead (2 x 2 x 2.5 N m).
+    assert np.linalg.norm(net_moment_about_com(inp, U0)) < 0.05
+
+
+def test_cop_saturates_at_the_toe() -> None:
+    # CoM 12 cm ahead: beyond the 9 cm toe. The CoP constraint must hold at the toe bound
+    # (My = -toe Fz, active) -- a flipped constraint would put it at the heel or beyond.
+    inp = make_input(x_com=0.12)
+    sol = MultiContactMpc(MpcSettings(qp=TIGHT)).update(inp)
+    U0 = sol.U[0]
+    np.testing.assert_allclose(-U0[:, 3] / U0[:, 2], 0.09, atol=1e-6)
+
+
+def test_swing_feet_have_exactly_zero_wrench() -> None:
+    contact = stepping_contact()
+    sol = MultiContactMpc().update(make_input(contact=contact, v0=(0.05, 0.1, 0.0)))
+    assert sol.ok
+    assert np.all(sol.U[~contact] == 0.0)
+    assert np.all(sol.U[contact][:, 2] > 0.0)
+    swing0 = ~contact[0]
+    assert np.all(sol.forces_world[swing0] == 0.0) and np.all(sol.moments_world[swing0] == 0.0)
+
+
+@pytest.mark.parametrize("backend", ["proxsuite", "piqp"])
+def test_bounds_hold_on_every_step_under_a_push(backend: str) -> None:
+    s = MpcSettings(backend=backend, mu_torsion=0.02)
+    inp = make_input(contact=stepping_contact(), v0=(0.6, -0.4, 0.0), yaw_rate=0.5)
+    sol = MultiContactMpc(s).update(inp)
+    assert sol.ok
+    active_found = False
+    # Tolerances: the solvers accept bound violations up to eps_abs = 1e-6 in the scaled
+    # problem, i.e. about 1e-4 N for forces of O(100) N; 1e-3 N / N m is a safe margin.
+    tol = 1e-3
+    for k in range(N):
+        for f in range(2):
+            if not inp.contact[k, f]:
+                continue
+            R = srbd.rot_z(float(inp.foot_yaw[k, f]))
+            Fx, Fy, Fz = R.T @ sol.U[k, f, 0:3]
+            My, Mz = sol.U[k, f, 3:5]
+            assert abs(Fx) <= s.mu * Fz + tol and abs(Fy) <= s.mu * Fz + tol
+            assert s.f_min - tol <= Fz <= s.f_max + tol
+            assert -s.toe * Fz - tol <= My <= s.heel * Fz + tol
+            assert abs(Mz) <= 0.02 * Fz + tol
+            active_found |= abs(Fy) > s.mu * Fz - tol or abs(Fx) > s.mu * Fz - tol
+            active_found |= Fz > s.f_max - tol or My < -s.toe * Fz + tol
+    assert active_found, "the push should make some bound active"
+
+
+@pytest.mark.parametrize(
+    "inp",
+    [
+        make_input(x_com=0.02, v0=(0.2, 0.1, 0.0)),
+        make_input(contact=stepping_contact(), v0=(0.6, -0.4, 0.0), yaw_rate=0.5),
+        make_input(contact=stepping_contact(), object_mass=4.0, yaw_rate=-0.3),
+    ],
+)
+def test_formulations_and_backends_agree(inp: MpcInput) -> None:
+    results = {}
+    for formulation in ("condensed", "sparse"):
+        for backend in ("proxsuite", "piqp"):
+            for active_set_iter in (0, 50):
+                if formulation == "sparse" and active_set_iter:
+                    continue  # the active-set path is dense-only
+                qp = replace(TIGHT, active_set_iter=active_set_iter)
+                s = MpcSettings(formulation=formulation, backend=backend, qp=qp)
+                sol = MultiContactMpc(s).update(inp)
+                assert sol.ok, (formulation, backend, sol.status)
+                results[(formulation, backend, active_set_iter)] = sol.U
+    ref = results[("condensed", "piqp", 0)]
+    for key, U in results.items():
+        # 1e-5 relative on the whole horizon: the QP is ill-conditioned (R = 1e-4 against
+        # state weights up to 2000, cond(H) ~ 1e7), so at eps 1e-10 the solutions agree to
+        # ~1e-7 relative; different algorithms stop at slightly different points.
+        rel = np.linalg.norm(U - ref) / np.linalg.norm(ref)
+        assert rel < 1e-5, (key, rel)
+
+
+def test_infeasible_settings_fail_cleanly() -> None:
+    # f_min > f_max: every QP is infeasible. With fallbacks the relaxed QP (f_min = 0) gives
+    # forces and the failure is reported; without, SolverFailure is raised.
+    bad = MpcSettings(f_min=300.0, f_max=250.0)
+    sol = MultiContactMpc(bad).update(make_input())
+    assert not sol.ok and sol.status != "solved" and sol.fallback == "relaxed"
+    assert np.all(sol.U[0, :, 2] <= 250.0 + 1e-3)
+    with pytest.raises(SolverFailure) as err:
+        MultiContactMpc(replace(bad, fallback=False)).update(make_input())
+    assert err.value.problem == "mpc" and err.value.status != "solved"
+
+
+def test_shifted_fallback_and_final_failure() -> None:
+    # Backend capped at one iteration and an active set capped at one: the first (rest)
+    # problem needs no active constraint and solves; the pushed one cannot, nor can its
+    # relaxed retry, so the previous solution is shifted by one step.
+    qp = QpSettings(max_iter=1, active_set_iter=1, scaling=True, preconditioner=False)
+    s = MpcSettings(backend="piqp", qp=qp, relaxed_qp=qp)
+    mpc = MultiContactMpc(s)
+    first = mpc.update(make_input())
+    assert first.ok
+    pushed = make_input(contact=stepping_contact(), v0=(0.6, -0.4, 0.0))
+    sol = mpc.update(pushed)
+    assert not sol.ok and sol.fallback == "shifted"
+    np.testing.assert_allclose(sol.U[0, 0], first.U[1, 0])
+    assert np.all(sol.U[~pushed.contact] == 0.0)
+    with pytest.raises(SolverFailure):
+        MultiContactMpc(s).update(pushed)
+
+
+def test_input_validation() -> None:
+    inp = make_input()
+    with pytest.raises(ValueError):
+        replace(inp, contact=np.ones((N - 1, 2), dtype=bool))
+    with pytest.raises(ValueError):
+        replace(inp, model="bogus")
+    with pytest.raises(ValueError):
+        MultiContactMpc(MpcSettings(horizon=10)).update(inp)
+    with pytest.raises(ValueError):
+        MpcSettings(dt=0.0)
