@@ -405,3 +405,7 @@ def main() -> None:
             markup=False,
         )
         sys.exit(EXIT_RUN_BROKE)
+
+
+if __name__ == "__main__":
+    main()

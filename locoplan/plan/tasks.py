@@ -35,7 +35,8 @@ class PlannedTask:
     Action parameters are None where they do not apply:
     `object` (pick/drop/throw), `hands` ("both" | "left" | "right": for a pick as written, for a
     drop/throw the hands that hold the object), `distance` (walk, body frame at task start, m),
-    `angle` (turn, rad, counter-clockwise positive), `onto` / `at` (drop: fixture name / object
+    `angle` (turn, or a walk's optional yaw change; rad, counter-clockwise
+    positive), `onto` / `at` (drop: fixture name / object
     centre in world, m), `velocity` (throw, body frame at release, m/s).
     """
 
@@ -78,7 +79,11 @@ def plan_tasks(scenario: Scenario) -> tuple[PlannedTask, ...]:
     for i, task in enumerate(scenario.tasks):
         pt = PlannedTask(index=i, action=task.action, start=task.start, end=task.end)
         if isinstance(task, WalkTask):
-            pt = replace(pt, distance=(task.distance[0], task.distance[1]))
+            pt = replace(
+                pt,
+                distance=(task.distance[0], task.distance[1]),
+                angle=math.radians(task.angle),
+            )
         elif isinstance(task, TurnTask):
             pt = replace(pt, angle=math.radians(task.angle))
         elif isinstance(task, PickTask):

@@ -2,7 +2,8 @@
 
 Each walk or turn is one min-jerk segment that starts and ends at rest and reaches its
 displacement exactly at the task's end: a walk moves the trunk by its `distance` expressed in
-the body frame at the task's start (yaw constant), a turn changes the yaw (position constant).
+the body frame at the task's start (along a straight line, turning by its optional `angle` on
+the way), a turn changes the yaw (position constant).
 Steps and non-locomotion tasks leave the pose where it is. The height is constant.
 Locomotion tasks never overlap, so the segments simply compose end to end.
 """
@@ -151,8 +152,9 @@ def build_trunk_path(
             c, s = math.cos(yaw), math.sin(yaw)
             bx, by = task.distance
             dx, dy = c * bx - s * by, s * bx + c * by
-            segments.append(TrunkSegment(task.index, task.start, task.end, x, y, yaw, dx, dy, 0.0))
-            x, y = x + dx, y + dy
+            turn = task.angle or 0.0
+            segments.append(TrunkSegment(task.index, task.start, task.end, x, y, yaw, dx, dy, turn))
+            x, y, yaw = x + dx, y + dy, yaw + turn
         elif task.action == "turn" and task.angle is not None:
             segments.append(
                 TrunkSegment(task.index, task.start, task.end, x, y, yaw, 0.0, 0.0, task.angle)

@@ -183,6 +183,15 @@ class WalkTask(_TaskBase):
         list[FiniteFloat],
         Field(min_length=2, max_length=2, description="[dx, dy], body frame at task start, m"),
     ]
+    angle: Annotated[
+        FiniteFloat,
+        Field(
+            description=(
+                "optional yaw change while walking, degrees (a locoplan addition to format v1:"
+                " walk while turning); the path is the straight line of `distance`"
+            )
+        ),
+    ] = 0.0
 
 
 class TurnTask(_TaskBase):

@@ -113,6 +113,8 @@ class ClosedLoop:
             if not (mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, i) or "").startswith("object_")
         ]
         self._next_record = 0.0
+        self._events = plan.events
+        self._next_event = 0
         if log is not None:
             log.joint_limits(
                 list(desc.joint_names),
@@ -128,6 +130,14 @@ class ClosedLoop:
                 f += np.asarray(p.force)
         self.backend.set_trunk_force(f)
 
+    def _log_plan_events(self, t: float) -> None:
+        """Plan events (task start/end, lift-off, touchdown, grasp, release) as they happen."""
+        assert self.log is not None
+        while self._next_event < len(self._events) and self._events[self._next_event].t <= t:
+            ev = self._events[self._next_event]
+            self.log.event(ev.t, ev.kind, task_index=ev.task_index, detail=ev.detail)
+            self._next_event += 1
+
     def _record(self, t: float, out_tau: FloatArray, mpc_u: FloatArray | None) -> None:
         rec = self.record
         d = self.backend.data
@@ -140,6 +150,7 @@ class ClosedLoop:
             rec.object_positions[name].append(np.asarray(d.xpos[bid]).copy())
         if self.log is None:
             return
+        self._log_plan_events(t)
         transforms = [
             Transform(
                 "world", name, np.asarray(d.xpos[i]).copy(), np.asarray(d.xquat[i])[[1, 2, 3, 0]]

@@ -277,9 +277,6 @@ def run_scenario(
             log=writer,
             pushes=options.pushes,
         )
-        for ev in plan.events:
-            if writer is not None and ev.kind in ("task_start", "task_end"):
-                writer.event(ev.t, ev.kind, task_index=ev.task_index, detail=ev.detail)
         rec = loop.run(plan.t_end, _Progress(progress, plan.t_end))
         metrics = compute_metrics(scenario, plan, rec, options, log_path)
         if writer is not None:
