@@ -43,7 +43,11 @@ class Push:
 
 @dataclass(slots=True)
 class RunRecord:
-    """What a run produced, sampled every RECORD_PERIOD (plus per-tick maxima)."""
+    """What a run produced, sampled every RECORD_PERIOD (plus per-tick maxima).
+
+    Per sample: time (s), trunk origin position (3,) and roll/pitch/yaw (rad) from MuJoCo's
+    free joint, each object's position (3,), the torques MuJoCo applied (16,) and the planned
+    stance flags (L, R)."""
 
     joint_names: tuple[str, ...]
     torque_limits: FloatArray
@@ -51,6 +55,8 @@ class RunRecord:
     base_position: list[FloatArray] = field(default_factory=list)
     base_rpy: list[tuple[float, float, float]] = field(default_factory=list)
     object_positions: dict[str, list[FloatArray]] = field(default_factory=dict)
+    joint_torque: list[FloatArray] = field(default_factory=list)
+    stance: list[tuple[bool, bool]] = field(default_factory=list)
     peak_abs_torque: FloatArray = field(default_factory=lambda: np.zeros(16))
     peak_torque_time: FloatArray = field(default_factory=lambda: np.zeros(16))
     mpc_times_s: list[float] = field(default_factory=list)
@@ -224,6 +230,8 @@ class ClosedLoop:
                 t_l = time.perf_counter()
                 if t + 1e-9 >= self._next_record:
                     self._next_record += RECORD_PERIOD
+                    rec.joint_torque.append(applied)
+                    rec.stance.append(out.stance)
                     self._record(be.time, applied, None)
                     if self.log is not None and out.mpc is not None:
                         self.log.json(
