@@ -198,3 +198,42 @@ def test_bad_arguments_rejected() -> None:
         QpSolver("osqp")
     with pytest.raises(ValueError):
         QpSettings(max_iter=0)
+
+
+def test_warm_start_never_reports_a_wrong_optimum() -> None:
+    # proxsuite 0.8 warm-started after update() returned feasible, non-optimal points as
+    # solved on such consecutive problems; the complementarity check must flag them.
+    rng = np.random.default_rng(0)
+    n = 38
+    M = rng.normal(size=(n, n))
+    H0 = M @ M.T / n + 0.1 * np.eye(n)
+    A0, C0 = rng.normal(size=(6, n)), rng.normal(size=(30, n))
+    solver = QpSolver(
+        "proxsuite",
+        QpSettings(
+            eps_abs=1e-6, eps_gap_abs=1e-6, warm_start=True, scaling=True, preconditioner=False
+        ),
+    )
+    n_ok = 0
+    for _ in range(30):
+        dH = rng.normal(scale=0.01, size=(n, n))
+        p = QpProblem(
+            H=H0 + dH @ dH.T,
+            g=rng.normal(size=n),
+            A=A0 + rng.normal(scale=0.01, size=A0.shape),
+            b=rng.normal(scale=0.2, size=6),
+            C=C0 + rng.normal(scale=0.01, size=C0.shape),
+            l=np.full(30, -1.0),
+            u=np.full(30, 1.0),
+            x_lower=np.full(n, -2.0),
+            x_upper=np.full(n, 2.0),
+        )
+        sol = solver.solve(p)
+        if sol.ok:
+            n_ok += 1
+            ref = solve_qp(p, "piqp", TIGHT)
+            # 1e-4: the warm solve runs at eps 1e-6 on a problem with multipliers O(1-10).
+            np.testing.assert_allclose(sol.x, ref.x, atol=1e-4)
+        else:
+            assert sol.status in {"inaccurate", "max_iterations"}
+    assert n_ok > 0

@@ -310,10 +310,10 @@ class _StepTerms:
 
     ``Iinv`` (N, 3, 3) inverse world inertia, ``mass`` (N,), ``tau_ext`` (N, 3) and
     ``f_ext`` (N, 3) the known external torque about the lever origin and force (None when no
-    object is held), ``Tw`` (N, 2, 3, 5) the torque of a unit foot-frame wrench, ``Rf``
-    (N, 2, 3, 3) the foot rotations, ``Phi`` (N, 6, 10) the omega/pdot kicks of the 10 wrench
-    components of step k (zero columns for swing feet), ``cols`` the stance variable indices
-    into the 10N layout.
+    object is held), ``Tw`` (N, 2, 3, 5) the torque of a unit foot-frame wrench,
+    ``cos_foot``/``sin_foot`` (N, 2) of the foot yaws, ``Phi`` (N, 6, 10) the omega/pdot kicks
+    of the 10 wrench components of step k (zero columns for swing feet), ``cols`` the stance
+    variable indices into the 10N layout.
     """
 
     Iinv: FloatArray
@@ -321,7 +321,8 @@ class _StepTerms:
     tau_ext: FloatArray | None
     f_ext: FloatArray | None
     Tw: FloatArray
-    Rf: FloatArray
+    cos_foot: FloatArray
+    sin_foot: FloatArray
     Phi: FloatArray
     cols: npt.NDArray[np.intp]
 
@@ -368,30 +369,41 @@ def _step_terms(inp: MpcInput, dt: float, Iinv_model2: FloatArray, Ib: FloatArra
     r = inp.p_feet - lever[:, None, :]  # (N, 2, 3)
     rx, ry, rz = r[..., 0], r[..., 1], r[..., 2]
     c, s = np.cos(inp.foot_yaw), np.sin(inp.foot_yaw)
-    zero = np.zeros_like(c)
-    one = np.ones_like(c)
-    # Columns: r x e1', r x e2', r x e3 (force part of skew(r) R_f), then e2', e3 (moments).
-    Tw = np.stack(
-        [
-            np.stack([-rz * s, -rz * c, ry, -s, zero], axis=-1),
-            np.stack([rz * c, -rz * s, -rx, c, zero], axis=-1),
-            np.stack([rx * s - ry * c, rx * c + ry * s, zero, zero, one], axis=-1),
-        ],
-        axis=2,
-    )
-    Rf = np.stack(
-        [np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)],
-        axis=2,
-    )
-    stance = inp.contact.astype(np.float64)
+    # Torque of a unit foot-frame wrench: columns r x e1', r x e2', r x e3 (the force part,
+    # skew(r) R_f) and e2', e3 (the moments), with e1' = (c, s, 0), e2' = (-s, c, 0).
+    Tw = np.zeros((N, 2, 3, 5))
+    Tw[..., 0, 0] = -rz * s
+    Tw[..., 1, 0] = rz * c
+    Tw[..., 2, 0] = rx * s - ry * c
+    Tw[..., 0, 1] = -rz * c
+    Tw[..., 1, 1] = -rz * s
+    Tw[..., 2, 1] = rx * c + ry * s
+    Tw[..., 0, 2] = ry
+    Tw[..., 1, 2] = -rx
+    Tw[..., 0, 3] = -s
+    Tw[..., 1, 3] = c
+    Tw[..., 2, 4] = 1.0
     Phi4 = np.zeros((N, 6, 2, 5))
     Phi4[:, 0:3] = np.swapaxes((dt * Iinv)[:, None] @ Tw, 1, 2)
-    Phi4[:, 3:6, :, 0:3] = np.swapaxes((dt / mass)[:, None, None, None] * Rf, 1, 2)
-    Phi4 *= stance[:, None, :, None]
+    kv = (dt / mass)[:, None]
+    Phi4[:, 3, :, 0] = kv * c
+    Phi4[:, 4, :, 0] = kv * s
+    Phi4[:, 3, :, 1] = -kv * s
+    Phi4[:, 4, :, 1] = kv * c
+    Phi4[:, 5, :, 2] = kv
+    Phi4 *= inp.contact[:, None, :, None]
     Phi = Phi4.reshape(N, 6, 10)
     cols = np.flatnonzero(np.repeat(inp.contact.reshape(-1), 5))
     return _StepTerms(
-        Iinv=Iinv, mass=mass, tau_ext=tau_ext, f_ext=f_ext, Tw=Tw, Rf=Rf, Phi=Phi, cols=cols
+        Iinv=Iinv,
+        mass=mass,
+        tau_ext=tau_ext,
+        f_ext=f_ext,
+        Tw=Tw,
+        cos_foot=c,
+        sin_foot=s,
+        Phi=Phi,
+        cols=cols,
     )
 
 
@@ -665,9 +677,11 @@ class MultiContactMpc:
             fallback = "shifted"
         U, X = self._finish(inp, st, kern, U_foot3)
         self._prev_U, self._prev_contact = U_foot3, inp.contact.copy()
-        outside += time.perf_counter() - t4
         F0 = U[0, :, 0:3].copy()
-        M0 = np.einsum("fij,fj->fi", st.Rf[0][:, :, 1:3], U[0, :, 3:5])
+        c0, s0 = st.cos_foot[0], st.sin_foot[0]
+        My0, Mz0 = U[0, :, 3], U[0, :, 4]
+        M0 = np.stack([-s0 * My0, c0 * My0, Mz0], axis=1)
+        outside += time.perf_counter() - t4
         return MpcSolution(
             ok=sol.ok,
             status=sol.status,
@@ -681,6 +695,19 @@ class MultiContactMpc:
             iterations=used.iterations,
             qp=sol,
         )
+
+    def build_qp(self, inp: MpcInput) -> QpProblem:
+        """The nominal QP of ``inp`` in the configured formulation (for benchmarks and tests).
+
+        Variables: the stance foot-frame wrenches [Fx', Fy', Fz, My', Mz'] in step order, foot
+        1 before foot 2 (preceded by the states x_1..x_N, 12 each, in the sparse form).
+        """
+        s = self.settings
+        Ib = np.ascontiguousarray(inp.inertia_body, dtype=np.float64)
+        kern = self._get_kernel(np.ascontiguousarray(inp.yaw_lin, dtype=np.float64), Ib)
+        st = _step_terms(inp, s.dt, kern.Iinv, Ib)
+        x_free = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, st.tau_ext, st.f_ext, s.dt)
+        return self._problem(inp, st, kern, x_free, s.f_min, s.f_max)
 
     def _problem(
         self,
@@ -699,7 +726,11 @@ class MultiContactMpc:
         self, inp: MpcInput, st: _StepTerms, kern: _Kernel, U_foot: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
         """U in the output convention and the predicted states from the foot-frame wrenches."""
-        F_world = np.einsum("kfij,kfj->kfi", st.Rf, U_foot[..., 0:3])
+        c, s = st.cos_foot, st.sin_foot
+        F_world = np.empty((U_foot.shape[0], 2, 3))
+        F_world[..., 0] = c * U_foot[..., 0] - s * U_foot[..., 1]
+        F_world[..., 1] = s * U_foot[..., 0] + c * U_foot[..., 1]
+        F_world[..., 2] = U_foot[..., 2]
         tau = np.einsum("kfia,kfa->ki", st.Tw, U_foot)
         force = F_world.sum(axis=1)
         if st.tau_ext is not None and st.f_ext is not None:

@@ -179,7 +179,12 @@ class QpSettings:
     (None: the backend's; proxsuite's default 1e-4 declared feasible MPC problems infeasible).
     ``max_iter_in`` caps proxsuite's inner iterations per outer one (None: its 1500): on an
     infeasible MPC problem that it fails to detect, 100 outer x 1500 inner iterations took 14 s,
-    while feasible ones never needed more than 14 in all.
+    while feasible ones never needed more than 14 in all. ``complementarity_tol``: a backend
+    solution whose complementarity residual max_j |z_j| * (distance of row j to the bound its
+    multiplier refers to) exceeds tol * (1 + |objective|) is reported "inaccurate" (not ok).
+    proxsuite 0.8 warm-started after an update returned feasible but non-optimal points as
+    "solved" (objective -2.75 instead of -7.61, residual 1e-2 while correct solutions stay
+    below 1e-6, distances capped at 1e6); None skips the check.
     """
 
     eps_abs: float = 1e-8
@@ -196,6 +201,7 @@ class QpSettings:
     eps_primal_inf: float | None = None
     eps_dual_inf: float | None = None
     max_iter_in: int | None = None
+    complementarity_tol: float | None = 1e-3
 
     def __post_init__(self) -> None:
         if not (self.eps_abs > 0 and self.eps_rel >= 0):
@@ -219,7 +225,7 @@ class QpSolution:
     """Result of one solve.
 
     ``x`` (n,) is the backend's last iterate (meaningful only when ``ok``). ``status`` is one
-    of "solved", "max_iterations", "primal_infeasible", "dual_infeasible",
+    of "solved", "max_iterations", "primal_infeasible", "dual_infeasible", "inaccurate",
     "closest_primal_feasible", "numerical_error", "unsolved", "invalid_settings", "not_run",
     "non_finite"; ``ok`` is True only for "solved" with a finite x. ``solve_time_s`` is the
     wall time of the solve call (scaling, the active-set attempt, the backend's data
@@ -301,6 +307,28 @@ def _jacobi_scaled(p: QpProblem) -> tuple[QpProblem, FloatArray]:
     return scaled, d
 
 
+def _complementarity(p: QpProblem, x: FloatArray, z_in: FloatArray, z_box: FloatArray) -> float:
+    """max_j |z_j| times the distance of row j to the bound its multiplier's sign refers to
+    (z > 0: upper, z < 0: lower), distances capped at 1e6 so that the 1e-200 multipliers
+    some backends leave on infinite bounds do not count."""
+    worst = 0.0
+    pairs = []
+    if p.C is not None:
+        Cx = p.C @ x
+        lo = p.l if p.l is not None else np.full(p.n_in, -math.inf)
+        hi = p.u if p.u is not None else np.full(p.n_in, math.inf)
+        pairs.append((Cx, lo, hi, z_in))
+    if p.has_box:
+        lo = p.x_lower if p.x_lower is not None else np.full(p.n, -math.inf)
+        hi = p.x_upper if p.x_upper is not None else np.full(p.n, math.inf)
+        pairs.append((x, lo, hi, z_box))
+    for v, lo, hi, z in pairs:
+        up = np.maximum(z, 0.0) * np.minimum(hi - v, 1e6)
+        down = np.maximum(-z, 0.0) * np.minimum(v - lo, 1e6)
+        worst = max(worst, float(np.max(up, initial=0.0)), float(np.max(down, initial=0.0)))
+    return worst
+
+
 def _violation(p: QpProblem, x: FloatArray) -> float:
     """Largest violation of p's constraints at x (inf norm, >= 0)."""
     v = 0.0
@@ -347,33 +375,35 @@ class QpSolver:
         """Solve ``problem``; never raises on solver failure (check ``ok``/``status``)."""
         s = self.settings
         t0 = time.perf_counter()
-        p, d = _jacobi_scaled(problem) if s.scaling else (problem, None)
+        p = problem
         if s.active_set_iter > 0 and p.n_eq == 0 and not p.is_sparse:
+            # The method is invariant to a diagonal scaling: it runs on the problem as given,
+            # its tolerance is on the bounds in their own units.
             r = solve_dual_active_set(
                 p.H, p.g, p.C, p.l, p.u, p.x_lower, p.x_upper, s.eps_abs, s.active_set_iter
             )
             if r.status in ("solved", "infeasible"):
                 # "infeasible" is a certificate: the violated constraint's normal is a
                 # non-positive combination of active normals (Farkas), no backend needed.
-                x = r.x * d if d is not None else r.x
                 ok = r.status == "solved"
                 return QpSolution(
-                    x=x,
+                    x=r.x,
                     status="solved" if ok else "primal_infeasible",
                     ok=ok,
                     iterations=r.iterations,
                     solve_time_s=time.perf_counter() - t0,
                     setup_time_s=0.0,
-                    primal_residual=_violation(problem, x),
+                    primal_residual=r.max_violation,
                     dual_residual=0.0,
-                    objective=problem.objective(x) if ok else math.nan,
+                    objective=problem.objective(r.x) if ok else math.nan,
                     backend=self.backend,
                     reused=False,
                     active_set=True,
                     y_eq=np.zeros(0),
                     z_in=r.z_in,
-                    z_box=r.z_box / d if d is not None else r.z_box,
+                    z_box=r.z_box,
                 )
+        p, d = _jacobi_scaled(problem) if s.scaling else (problem, None)
         key = _structure_key(p)
         reuse = self._solver is not None and key == self._key
         if self.backend == "proxsuite":
@@ -390,6 +420,11 @@ class QpSolver:
         status = raw.status
         if status == "solved" and not finite:
             status = "non_finite"
+        objective = problem.objective(x) if finite else math.nan
+        if status == "solved" and s.complementarity_tol is not None:
+            comp = _complementarity(problem, x, raw.z_in, z_box)
+            if comp > s.complementarity_tol * (1.0 + abs(objective)):
+                status = "inaccurate"
         ok = status == "solved"
         # A failed iterate is a bad warm start: the next solve starts cold.
         self._has_result = ok
@@ -402,7 +437,7 @@ class QpSolver:
             setup_time_s=raw.setup_time_s,
             primal_residual=raw.primal_residual,
             dual_residual=raw.dual_residual,
-            objective=problem.objective(x) if finite else math.nan,
+            objective=objective,
             backend=self.backend,
             reused=raw.reused,
             active_set=False,
