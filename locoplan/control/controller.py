@@ -270,6 +270,8 @@ class LocoManipulationController:
         held = np.asarray(self.plan.object_held(times), dtype=bool)
         obj_mass = np.asarray(self.plan.held_mass(times), dtype=float)
         p_obj = np.asarray(self.plan.object_positions(times, p_base_ref, yaw_ref), dtype=float)
+        if held.any():
+            x_ref[:, 3:5] += self._load_shift(obj_mass, p_obj, p_ref, held)
         inp = MpcInput(
             x0=x0,
             x_ref=x_ref,
@@ -286,6 +288,22 @@ class LocoManipulationController:
             model=self.s.model,
         )
         return self.mpc.update(inp)
+
+    def _load_shift(
+        self,
+        obj_mass: FloatArray,
+        p_obj: FloatArray,
+        p_com: FloatArray,
+        held: npt.NDArray[np.bool_],
+    ) -> FloatArray:
+        """CoM reference shift (n, 2) that puts the combined CoM of robot and held object over
+        the support centre: (m p_c + m_o p_o) = (m + m_o) s with p_o = p_c + d gives
+        p_c = s - m_o d / (m + m_o). Without it the MPC, which sees only 0.6 s ahead, does not
+        find the backward lean a held load needs (shared/controller-notes.md)."""
+        d = p_obj[:, :2] - p_com[:, :2]
+        shift = -(obj_mass / (self.mass + obj_mass))[:, None] * d
+        shift[~held] = 0.0
+        return shift
 
     # -- the tick ------------------------------------------------------------------------------
     def step(self, t: float, q: FloatArray, v: FloatArray) -> ControlOutput:
@@ -500,7 +518,16 @@ class LocoManipulationController:
             w_des - omega_w
         )
         tasks.append(AccelerationTask(J_base[3:], dJv_base[3:], acc_rot))
-        p_des = np.asarray(ref.position, dtype=float)
+        p_des = np.asarray(ref.position, dtype=float).copy()
+        m_o = float(self.plan.held_mass_at(t))
+        if m_o > 0.0:
+            p_obj = np.asarray(
+                self.plan.object_positions(np.array([t]), p_des[None, :], np.array([ref.yaw])),
+                dtype=float,
+            )
+            p_des[:2] += self._load_shift(np.array([m_o]), p_obj, p_des[None, :], np.array([True]))[
+                0
+            ]
         v_des = np.asarray(ref.velocity, dtype=float)
         v_base = R @ v[:3]
         acc_pos = np.asarray(s.trunk_kp_pos) * (p_des - q[:3]) + np.asarray(s.trunk_kd_pos) * (

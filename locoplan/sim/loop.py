@@ -24,6 +24,7 @@ from locoplan.plan import Plan
 from locoplan.robot.description import RobotDescription
 from locoplan.robot.pinocchio_model import PinocchioRobot
 from locoplan.sim.backend import MujocoBackend
+from locoplan.sim.grasp import ConveyorDrive, GraspManager
 from locoplan.sim.scene import Scene
 
 FloatArray = npt.NDArray[np.float64]
@@ -63,6 +64,9 @@ class RunRecord:
     wbc_times_s: list[float] = field(default_factory=list)
     tick_split_s: dict[str, float] = field(default_factory=dict)
     n_ticks: int = 0
+    # (time, kind, object) for grasp, grasp_failed and release.
+    grasp_events: list[tuple[float, str, str]] = field(default_factory=list)
+    held_at_end: set[str] = field(default_factory=set)
     n_clipped: int = 0
     n_mpc_fallbacks: int = 0
     n_wbc_failures: int = 0
@@ -106,6 +110,8 @@ class ClosedLoop:
         self.controller = LocoManipulationController(PinocchioRobot(desc), desc, plan, settings)
         self.log = log
         self.pushes = pushes
+        self.grasp = GraspManager(scene, plan.holds)
+        self.conveyor = ConveyorDrive(scene)
         self.record = RunRecord(
             joint_names=tuple(desc.joint_names),
             torque_limits=np.asarray(desc.torque_limits, dtype=float).copy(),
@@ -214,6 +220,11 @@ class ClosedLoop:
                         if not out.wbc.ok:
                             rec.n_wbc_failures += 1
                 rec.n_clipped += out.n_clipped
+                for kind, fields in self.grasp.update(t, be.data):
+                    rec.grasp_events.append((t, kind, str(fields["object"])))
+                    if self.log is not None:
+                        self.log.event(t, kind, **fields)
+                self.conveyor.apply(be.data, self.grasp.held_objects())
                 t_p = time.perf_counter()
                 self._apply_pushes(t)
                 be.step(out.tau_clipped)
@@ -266,6 +277,7 @@ class ClosedLoop:
             rec.error = str(exc)
             raise
         finally:
+            rec.held_at_end = self.grasp.held_objects()
             rec.sim_time = be.time
             rec.wall_time = time.perf_counter() - wall0
             rec.tick_split_s = split

@@ -55,7 +55,13 @@ class Scene:
     model: mujoco.MjModel
     robot: RobotDescription
     object_body_ids: dict[str, int] = field(default_factory=dict)
+    object_geom_ids: dict[str, int] = field(default_factory=dict)
+    object_defs: dict[str, ObjectDef] = field(default_factory=dict)
     fixture_geom_ids: dict[str, int] = field(default_factory=dict)
+    fixture_defs: dict[str, FixtureDef] = field(default_factory=dict)
+    # Inactive weld equality ids per (object, hand index 0=L/1=R): the grasp mechanism.
+    grasp_welds: dict[tuple[str, int], int] = field(default_factory=dict)
+    hand_body_ids: tuple[int, ...] = ()
     floor_geom_id: int = -1
 
 
@@ -120,15 +126,41 @@ def build_scene(
             contype=1,
             conaffinity=1,
         )
+    hand_bodies = [spec.site(site).parent.name for site in robot.hand_frames]
+    for ob in objects:
+        for k, hand_body in enumerate(hand_bodies):
+            # Grasp = a weld between the hand's link and the object, switched on by the
+            # simulator when the hand touches the object at the planned grasp time (see
+            # locoplan.sim.grasp); its relative pose is set at that instant so nothing jumps.
+            spec.add_equality(
+                name=f"grasp_{ob.name}_{k}",
+                type=mujoco.mjtEq.mjEQ_WELD,
+                objtype=mujoco.mjtObj.mjOBJ_BODY,
+                name1=hand_body,
+                name2=f"object_{ob.name}",
+                active=False,
+            )
     model = spec.compile()
     scene = Scene(model=model, robot=robot)
+    scene.hand_body_ids = tuple(
+        mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in hand_bodies
+    )
     scene.floor_geom_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
     for ob in objects:
         scene.object_body_ids[ob.name] = mujoco.mj_name2id(
             model, mujoco.mjtObj.mjOBJ_BODY, f"object_{ob.name}"
         )
+        scene.object_geom_ids[ob.name] = mujoco.mj_name2id(
+            model, mujoco.mjtObj.mjOBJ_GEOM, f"object_{ob.name}_geom"
+        )
+        scene.object_defs[ob.name] = ob
+        for k in range(len(hand_bodies)):
+            scene.grasp_welds[(ob.name, k)] = mujoco.mj_name2id(
+                model, mujoco.mjtObj.mjOBJ_EQUALITY, f"grasp_{ob.name}_{k}"
+            )
     for fx in fixtures:
         scene.fixture_geom_ids[fx.name] = mujoco.mj_name2id(
             model, mujoco.mjtObj.mjOBJ_GEOM, f"fixture_{fx.name}"
         )
+        scene.fixture_defs[fx.name] = fx
     return scene

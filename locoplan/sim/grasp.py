@@ -1,0 +1,171 @@
+"""Grasping and conveyor belts: the physics the plain contact model does not give.
+
+Grasp. A hand closes on an object when the plan says the hand reaches it (the pick's grasp
+instant) AND the hand really touches it in MuJoCo: every planned hand must be within
+GRASP_TOLERANCE of the object's surface. Closing switches on a weld equality between the
+hand's link and the object at their current relative pose (so nothing jumps or teleports);
+from then on the object's weight reaches the robot through the hands in the physics. At the
+planned release instant (drop or throw) the welds are switched off. If the hands are not
+there by GRASP_WINDOW after the planned lift-off, the grasp fails (an event, and the object
+stays where it is), which the metrics turn into a failed pick.
+
+Conveyor. A belt moving at `speed` along the conveyor's own x axis drags objects resting on it
+by friction: a horizontal force c m (v_belt - v_object), clamped to mu m g, while the object
+touches the conveyor's top (a simple model of a belt).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from locoplan.plan.manipulation import ObjectHold
+from locoplan.sim.scene import Scene
+
+FloatArray = npt.NDArray[np.float64]
+
+GRASP_TOLERANCE = 0.03  # m between the hand point and the object's surface
+GRASP_EARLY = 0.05  # s before the planned grasp instant the hands may close
+GRASP_WINDOW = 0.25  # s after the planned lift-off the grasp may still close
+BELT_GAIN = 20.0  # 1/s: how fast the belt's friction brings an object to belt speed
+BELT_MU = 0.8  # belt friction coefficient for the drag clamp
+
+
+@dataclass(slots=True)
+class _HoldState:
+    hold: ObjectHold
+    hands: tuple[int, ...]
+    state: str = "waiting"  # waiting | grasped | released | failed
+    grasp_time: float | None = None
+    release_time: float | None = None
+
+
+def surface_distance(scene: Scene, data: mujoco.MjData, name: str, point: FloatArray) -> float:
+    """Distance (m) from a world point to the object's surface (0 inside the object)."""
+    bid = scene.object_body_ids[name]
+    R = data.xmat[bid].reshape(3, 3)
+    local = R.T @ (point - data.xpos[bid])
+    ob = scene.object_defs[name]
+    if ob.shape == "sphere":
+        return max(0.0, float(np.linalg.norm(local)) - ob.size[0])
+    half = np.asarray(ob.size) / 2.0
+    return float(np.linalg.norm(np.maximum(np.abs(local) - half, 0.0)))
+
+
+class GraspManager:
+    """Closes and opens the grasp welds following the plan and the measured hand positions."""
+
+    def __init__(self, scene: Scene, holds: tuple[ObjectHold, ...]) -> None:
+        self.scene = scene
+        side = {"L": 0, "R": 1}
+        self.holds = [_HoldState(h, tuple(side[x] for x in h.hands)) for h in holds]
+        self._hand_sites = [
+            mujoco.mj_name2id(scene.model, mujoco.mjtObj.mjOBJ_SITE, s)
+            for s in scene.robot.hand_frames
+        ]
+
+    def held_objects(self) -> set[str]:
+        """Objects currently welded to a hand."""
+        return {h.hold.object for h in self.holds if h.state == "grasped"}
+
+    def update(self, t: float, data: mujoco.MjData) -> list[tuple[str, dict[str, object]]]:
+        """Advance the grasp state machine at time t (s); returns (event kind, fields)."""
+        events: list[tuple[str, dict[str, object]]] = []
+        for hs in self.holds:
+            h = hs.hold
+            name = h.object
+            if hs.state == "waiting" and t >= h.grasp - GRASP_EARLY:
+                gaps = [
+                    surface_distance(self.scene, data, name, data.site_xpos[self._hand_sites[k]])
+                    for k in hs.hands
+                ]
+                if max(gaps) <= GRASP_TOLERANCE:
+                    for k in hs.hands:
+                        self._close(name, k, data)
+                    hs.state = "grasped"
+                    hs.grasp_time = t
+                    events.append(("grasp", {"object": name, "gap_m": round(max(gaps), 4)}))
+                elif t > h.lift + GRASP_WINDOW:
+                    hs.state = "failed"
+                    events.append(
+                        (
+                            "grasp_failed",
+                            {"object": name, "gap_m": round(max(gaps), 4), "hands": list(h.hands)},
+                        )
+                    )
+            if hs.state == "grasped" and t >= h.release:
+                for k in hs.hands:
+                    data.eq_active[self.scene.grasp_welds[(name, k)]] = 0
+                hs.state = "released"
+                hs.release_time = t
+                events.append(("release", {"object": name, "kind": h.release_kind or ""}))
+        return events
+
+    def _close(self, name: str, hand: int, data: mujoco.MjData) -> None:
+        m = self.scene.model
+        eq = self.scene.grasp_welds[(name, hand)]
+        b1 = self.scene.hand_body_ids[hand]
+        b2 = self.scene.object_body_ids[name]
+        # Weld data: anchor (3, in body2's frame), relpose = body2's pose in body1's frame
+        # (position 3, quaternion 4), torque scale (1).
+        R1 = data.xmat[b1].reshape(3, 3)
+        rel_pos = R1.T @ (data.xpos[b2] - data.xpos[b1])
+        q1_inv = np.zeros(4)
+        mujoco.mju_negQuat(q1_inv, data.xquat[b1])
+        rel_quat = np.zeros(4)
+        mujoco.mju_mulQuat(rel_quat, q1_inv, data.xquat[b2])
+        m.eq_data[eq, 0:3] = 0.0
+        m.eq_data[eq, 3:6] = rel_pos
+        m.eq_data[eq, 6:10] = rel_quat
+        m.eq_data[eq, 10] = 1.0
+        data.eq_active[eq] = 1
+
+
+class ConveyorDrive:
+    """Belt friction on objects resting on moving conveyors (applied every physics step)."""
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+        self.belts = [
+            (scene.fixture_geom_ids[name], fx.speed, fx.yaw)
+            for name, fx in scene.fixture_defs.items()
+            if fx.kind == "conveyor" and fx.speed != 0.0
+        ]
+        m = scene.model
+        self._objects = [
+            (
+                name,
+                scene.object_body_ids[name],
+                scene.object_geom_ids[name],
+                int(m.jnt_dofadr[m.body_jntadr[scene.object_body_ids[name]]]),
+                scene.object_defs[name].mass,
+            )
+            for name in scene.object_body_ids
+        ]
+
+    def apply(self, data: mujoco.MjData, held: set[str]) -> None:
+        if not self.belts:
+            return
+        touching: set[tuple[int, int]] = set()
+        for i in range(data.ncon):
+            c = data.contact[i]
+            touching.add((int(c.geom1), int(c.geom2)))
+            touching.add((int(c.geom2), int(c.geom1)))
+        for name, bid, gid, dof, mass in self._objects:
+            force = np.zeros(3)
+            if name not in held:
+                for belt_geom, speed, yaw in self.belts:
+                    if (gid, belt_geom) in touching:
+                        v_belt = speed * np.array([math.cos(yaw), math.sin(yaw)])
+                        dv = v_belt - data.qvel[dof : dof + 2]
+                        f = BELT_GAIN * mass * dv
+                        limit = BELT_MU * mass * 9.81
+                        norm = float(np.linalg.norm(f))
+                        if norm > limit:
+                            f *= limit / norm
+                        force[:2] += f
+            data.xfrc_applied[bid, :3] = force
