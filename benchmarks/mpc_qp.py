@@ -77,6 +77,7 @@ def make_input(
         object_held=held,
         object_mass=object_mass,
         p_object=np.tile([0.3, 0.0, Z_COM], (N, 1)),
+        t=t,
     )
 
 

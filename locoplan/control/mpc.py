@@ -39,7 +39,13 @@ import numpy.typing as npt
 import scipy.sparse as sp
 
 from locoplan.control import srbd
-from locoplan.control.qp import QpProblem, QpSettings, QpSolution, QpSolver
+from locoplan.control.qp import (
+    QpProblem,
+    QpSettings,
+    QpSolution,
+    QpSolver,
+    active_constraint_ids,
+)
 from locoplan.exceptions import SolverFailure
 
 FloatArray = npt.NDArray[np.float64]
@@ -144,7 +150,9 @@ class MpcInput:
     ``inertia_body`` (3, 3) (kg m^2, trunk axes). ``object_held`` (N,) bool (sigma_e),
     ``object_mass`` (kg; a scalar or (N,) per step), ``p_object`` (N, 3) planned object CoM
     (world, m). ``model``
-    "external-force" (Model 2) or "combined" (Model 1). ``t`` the time (s), for errors.
+    "external-force" (Model 2) or "combined" (Model 1). ``t`` the time (s): reported in
+    errors, and the elapsed whole steps since the previous update shift the previous
+    solution (fallback) and its active set (the active-set solver's starting guess).
 
     The lever arms of step k are taken from the CoM at step k: x0's for k = 0, x_ref[k-1]'s
     after.
@@ -477,6 +485,10 @@ class MultiContactMpc:
         self._cons_cache: dict[tuple[int, float, float], tuple[FloatArray, ...]] = {}
         self._prev_U: FloatArray | None = None
         self._prev_contact: BoolArray | None = None
+        self._prev_t = 0.0
+        # Previous QP's active constraints and stance foot-steps (k, foot), for the hint.
+        self._prev_active: npt.NDArray[np.intp] | None = None
+        self._prev_fs: npt.NDArray[np.intp] | None = None
 
     # --- caches ----------------------------------------------------------------------------
 
@@ -644,8 +656,10 @@ class MultiContactMpc:
                 None,
             )
         qp = self._problem(inp, st, kern, x_free, s.f_min, s.f_max)
+        shift = self._shift(inp)
+        hint = self._active_hint(st.cols, qp, shift) if s.formulation == "condensed" else None
         t1 = time.perf_counter()
-        sol = self._solver.solve(qp)
+        sol = self._solver.solve(qp, active_hint=hint)
         t2 = time.perf_counter()
         solve_time = sol.solve_time_s
         outside = (t1 - t0) + (t2 - t1 - sol.solve_time_s)
@@ -670,13 +684,18 @@ class MultiContactMpc:
             U_foot[st.cols] = w
             U_foot3 = U_foot.reshape(N, 2, 5)
         else:
-            shifted = self._shifted(inp)
+            shifted = self._shifted(inp, shift)
             if shifted is None:
                 raise SolverFailure(inp.t, "mpc", s.backend, sol.status, "no fallback left")
             U_foot3 = shifted
             fallback = "shifted"
         U, X = self._finish(inp, st, kern, U_foot3)
-        self._prev_U, self._prev_contact = U_foot3, inp.contact.copy()
+        self._prev_U, self._prev_contact, self._prev_t = U_foot3, inp.contact.copy(), inp.t
+        if used.ok and s.formulation == "condensed":
+            self._prev_active = active_constraint_ids(used)
+            self._prev_fs = st.cols[::5] // 5
+        else:
+            self._prev_active = None
         F0 = U[0, :, 0:3].copy()
         c0, s0 = st.cos_foot[0], st.sin_foot[0]
         My0, Mz0 = U[0, :, 3], U[0, :, 4]
@@ -740,8 +759,43 @@ class MultiContactMpc:
         U = np.concatenate([F_world, U_foot[..., 3:5]], axis=2)
         return U, X
 
-    def _shifted(self, inp: MpcInput) -> FloatArray | None:
-        """The previous foot-frame wrenches one step on; weight share where none is known."""
+    def _shift(self, inp: MpcInput) -> int:
+        """Whole MPC steps elapsed since the previous update (from ``MpcInput.t``)."""
+        return max(0, round((inp.t - self._prev_t) / self.settings.dt))
+
+    def _active_hint(
+        self, cols: npt.NDArray[np.intp], qp: QpProblem, shift: int
+    ) -> npt.NDArray[np.intp] | None:
+        """The previous active set moved ``shift`` steps on, in this QP's numbering."""
+        if self._prev_active is None or self._prev_fs is None or self._prev_active.size == 0:
+            return None
+        N = self.settings.horizon
+        R = self._rows.shape[0]
+        ids = self._prev_active
+        n_fs_old = self._prev_fs.shape[0]
+        m_old, n_old = n_fs_old * R, n_fs_old * 5
+        upper = ids >= m_old + n_old
+        j = np.where(upper, ids - (m_old + n_old), ids)
+        is_row = j < m_old
+        fs_old = np.where(is_row, j // R, (j - m_old) // 5)
+        within = np.where(is_row, j % R, (j - m_old) % 5)
+        k_old, foot = self._prev_fs[fs_old] // 2, self._prev_fs[fs_old] % 2
+        k_new = k_old - shift
+        table = np.full((N, 2), -1, dtype=np.intp)
+        fs_new = cols[::5] // 5
+        table[fs_new // 2, fs_new % 2] = np.arange(fs_new.shape[0])
+        ok = (k_new >= 0) & (k_new < N)
+        b = np.full(ids.shape[0], -1, dtype=np.intp)
+        b[ok] = table[k_new[ok], foot[ok]]
+        keep = b >= 0
+        m_new, n_new = qp.n_in, qp.n
+        j_new = np.where(is_row, b * R + within, m_new + b * 5 + within)
+        out = np.where(upper, j_new + (m_new + n_new), j_new)[keep]
+        return out.astype(np.intp)
+
+    def _shifted(self, inp: MpcInput, shift: int) -> FloatArray | None:
+        """The previous foot-frame wrenches ``shift`` steps on (zero or more); weight share
+        where none is known."""
         if self._prev_U is None or self._prev_contact is None:
             return None
         N = self.settings.horizon
@@ -752,8 +806,8 @@ class MultiContactMpc:
             for f in range(2):
                 if not inp.contact[k, f]:
                     continue
-                if k + 1 < N and prev_c[k + 1, f]:
-                    U[k, f] = prev[k + 1, f]
+                if k + shift < N and prev_c[k + shift, f]:
+                    U[k, f] = prev[k + shift, f]
                 else:
                     U[k, f, 2] = inp.mass * srbd.GRAVITY / max(n_st, 1)
         return U

@@ -41,7 +41,7 @@ import piqp
 import scipy.sparse as sp
 from proxsuite import proxqp
 
-from locoplan.control.qp_active_set import solve_dual_active_set
+from locoplan.control.qp_active_set import constraint_ids, solve_dual_active_set
 
 FloatArray = npt.NDArray[np.float64]
 # A dense FloatArray or a scipy.sparse matrix (scipy ships no type stubs here).
@@ -371,8 +371,12 @@ class QpSolver:
         self._key = None
         self._has_result = False
 
-    def solve(self, problem: QpProblem) -> QpSolution:
-        """Solve ``problem``; never raises on solver failure (check ``ok``/``status``)."""
+    def solve(self, problem: QpProblem, active_hint: npt.ArrayLike | None = None) -> QpSolution:
+        """Solve ``problem``; never raises on solver failure (check ``ok``/``status``).
+
+        ``active_hint``: guessed active constraint ids for the active-set path (see
+        `qp_active_set.constraint_ids`; `active_constraint_ids` of a previous solution).
+        """
         s = self.settings
         t0 = time.perf_counter()
         p = problem
@@ -380,7 +384,16 @@ class QpSolver:
             # The method is invariant to a diagonal scaling: it runs on the problem as given,
             # its tolerance is on the bounds in their own units.
             r = solve_dual_active_set(
-                p.H, p.g, p.C, p.l, p.u, p.x_lower, p.x_upper, s.eps_abs, s.active_set_iter
+                p.H,
+                p.g,
+                p.C,
+                p.l,
+                p.u,
+                p.x_lower,
+                p.x_upper,
+                s.eps_abs,
+                s.active_set_iter,
+                initial_active=active_hint,
             )
             if r.status in ("solved", "infeasible"):
                 # "infeasible" is a certificate: the violated constraint's normal is a
@@ -624,6 +637,17 @@ class QpSolver:
             z_in=z_in[:n_in],
             z_box=z_box,
         )
+
+
+def active_constraint_ids(sol: QpSolution, rel_tol: float = 1e-9) -> npt.NDArray[np.intp]:
+    """Ids (`qp_active_set.constraint_ids` numbering) of the constraints whose multiplier in
+    ``sol`` is nonzero (above rel_tol times the largest): a hint for the next, similar QP."""
+    z = np.concatenate([sol.z_in, sol.z_box])
+    if z.shape[0] == 0 or not np.all(np.isfinite(z)):
+        return np.zeros(0, dtype=np.intp)
+    thresh = rel_tol * float(np.max(np.abs(z), initial=0.0))
+    nz = np.flatnonzero(np.abs(z) > thresh)
+    return constraint_ids(sol.z_in.shape[0], sol.z_box.shape[0], nz, z[nz] > 0)
 
 
 def solve_qp(

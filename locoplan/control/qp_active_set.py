@@ -30,6 +30,7 @@ FloatArray = npt.NDArray[np.float64]
 
 _potrf = scipy.linalg.get_lapack_funcs("potrf", dtype=np.float64)
 _trsv = scipy.linalg.get_blas_funcs("trsv", dtype=np.float64)
+_trsm = scipy.linalg.get_blas_funcs("trsm", dtype=np.float64)
 
 
 def _chol_solve(U: FloatArray, b: FloatArray) -> FloatArray:
@@ -57,6 +58,73 @@ class ActiveSetResult:
     max_violation: float
 
 
+def constraint_ids(
+    m: int, n: int, row: npt.ArrayLike, upper: npt.ArrayLike
+) -> npt.NDArray[np.intp]:
+    """Ids of one-sided constraints: ``row`` < m is a row of C, m + i the box on x_i;
+    ``upper`` selects the upper bound (else the lower)."""
+    r = np.asarray(row, dtype=np.intp)
+    return np.where(np.asarray(upper, dtype=bool), (m + n) + r, r)
+
+
+def _start_from_guess(
+    factor: FloatArray,
+    x_u: FloatArray,
+    C: FloatArray | None,
+    m: int,
+    n: int,
+    lo: FloatArray,
+    hi: FloatArray,
+    ids: npt.ArrayLike,
+) -> tuple[list[int], FloatArray, FloatArray, FloatArray, FloatArray] | None:
+    """Active set, multipliers, V, S^-1 and x for a guessed active set (see
+    `solve_dual_active_set`), or None if nothing of the guess is usable."""
+    mn = m + n
+    cand = np.unique(np.asarray(ids, dtype=np.intp))
+    cand = cand[(cand >= 0) & (cand < 2 * mn)]
+    row = np.where(cand < mn, cand, cand - mn)
+    upper = cand >= mn
+    bound = np.where(upper, -hi[row], lo[row])
+    ok = np.isfinite(bound)
+    # A row cannot be active at both bounds.
+    cand, row, upper, bound = cand[ok], row[ok], upper[ok], bound[ok]
+    _, first = np.unique(row, return_index=True)
+    cand, row, upper, bound = cand[first], row[first], upper[first], bound[first]
+    if cand.shape[0] == 0:
+        return None
+    N_A = np.zeros((n, cand.shape[0]))
+    in_c = row < m
+    if C is not None and np.any(in_c):
+        N_A[:, in_c] = C[row[in_c]].T
+    box = np.flatnonzero(~in_c)
+    N_A[row[box] - m, box] = 1.0
+    N_A[:, upper] *= -1.0
+    V_all = np.asarray(_trsm(1.0, factor, _trsm(1.0, factor, N_A, trans_a=1), trans_a=0))
+    S_all = N_A.T @ V_all
+    keep = np.ones(cand.shape[0], dtype=bool)
+    for _ in range(cand.shape[0]):
+        S = S_all[np.ix_(keep, keep)]
+        try:
+            lam = scipy.linalg.solve(S, bound[keep] - N_A[:, keep].T @ x_u, assume_a="pos")
+        except (np.linalg.LinAlgError, ValueError):
+            return None
+        if np.all(lam >= 0.0):
+            break
+        idx = np.flatnonzero(keep)
+        keep[idx[lam < 0.0]] = False
+        if not keep.any():
+            return None
+    else:
+        return None
+    V = V_all[:, keep]
+    try:
+        Sinv = np.asarray(scipy.linalg.inv(S), dtype=np.float64)
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    x = x_u + V @ lam
+    return [int(i) for i in cand[keep]], lam, V, Sinv, x
+
+
 def solve_dual_active_set(
     H: FloatArray,
     g: FloatArray,
@@ -67,12 +135,20 @@ def solve_dual_active_set(
     x_upper: FloatArray | None = None,
     tol: float = 1e-9,
     max_iter: int = 50,
+    initial_active: npt.ArrayLike | None = None,
 ) -> ActiveSetResult:
     """Solve the QP by the dual active-set method; see the module docstring.
 
     H (n, n) positive definite, g (n,), C (m, n) with l/u (m,), box x_lower/x_upper (n,);
     +-inf or None for absent bounds. ``tol`` is the accepted bound violation, ``max_iter``
     caps the iterations (the result is then "max_iterations" and x is not optimal).
+
+    ``initial_active``: a guess of the active set (constraint ids, see `constraint_ids`), e.g.
+    the previous solution's in a control loop. The method then starts from the minimiser with
+    those constraints as equalities, solved at once with BLAS-3 operations, after dropping
+    those with negative multipliers; that start is a valid dual-feasible point, so the result
+    is the same optimum, reached in fewer iterations when the guess is good. A guess whose
+    normals are linearly dependent is ignored.
     """
     n = g.shape[0]
     m = 0 if C is None else C.shape[0]
@@ -113,9 +189,21 @@ def solve_dual_active_set(
         return n_j if i < mn else -n_j
 
     active: list[int] = []
-    lam = np.zeros(0)
-    V = np.zeros((n, 0))  # H^-1 N_A
-    Sinv = np.zeros((0, 0))  # (N_A' H^-1 N_A)^-1, kept by bordering and its inverse
+    # Buffers: rows of VT are the columns of V = H^-1 N_A; Sinv = (N_A' H^-1 N_A)^-1 is
+    # kept by bordering (add) and its inverse formula (drop); q active constraints in use.
+    cap = n + 1  # at most n independent active constraints
+    VT = np.empty((cap, n))
+    Sinv = np.empty((cap, cap))
+    lam = np.empty(cap)
+    q = 0
+    if initial_active is not None:
+        guess = _start_from_guess(factor, x, C, m, n, lo, hi, initial_active)
+        if guess is not None:
+            active, lam0, V0, Sinv0, x = guess
+            q = len(active)
+            VT[:q] = V0.T
+            Sinv[:q, :q] = Sinv0
+            lam[:q] = lam0
     iterations = 0
     status = "max_iterations"
     s = slacks(x)
@@ -136,18 +224,18 @@ def solve_dual_active_set(
             if iterations >= max_iter:
                 break
             iterations += 1
-            if active:
-                b = n_p @ V
-                r = Sinv @ b
-                z = v - V @ r
+            if q:
+                b = VT[:q] @ n_p
+                r = Sinv[:q, :q] @ b
+                z = v - r @ VT[:q]
                 zn = vn - float(b @ r)
             else:
-                b = r = np.zeros(0)
+                r = np.zeros(0)
                 z = v
                 zn = vn
             # Full step: makes constraint p exact. Below this curvature z is taken as zero
             # (n_p depends linearly on the active normals).
-            t2 = -s_p / zn if zn > 1e-12 * vn else np.inf
+            t2 = -s_p / zn if zn > 1e-12 * vn and q < n else np.inf
             k, t1 = -1, np.inf
             pos = np.flatnonzero(r > 0.0)
             if pos.shape[0]:
@@ -157,41 +245,41 @@ def solve_dual_active_set(
             t = min(t1, t2)
             if not t < np.inf:
                 return ActiveSetResult(
-                    "infeasible", x, iterations, len(active), np.zeros(m), np.zeros(n), float(-s[p])
+                    "infeasible", x, iterations, q, np.zeros(m), np.zeros(n), float(-s[p])
                 )
             if t2 < np.inf:
                 x = x + t * z
                 s_p += t * zn
-            lam = lam - t * r
+            lam[:q] -= t * r
             lam_p += t
             if t2 <= t1:
                 # Add p. Bordering: with w = S^-1 b = r and delta = zn,
                 # [[S, b], [b', c]]^-1 = [[S^-1 + r r'/delta, -r/delta], [-r'/delta, 1/delta]].
-                q = Sinv.shape[0]
-                Sn = np.empty((q + 1, q + 1))
-                Sn[:q, :q] = Sinv + np.outer(r, r) / zn
-                Sn[:q, q] = Sn[q, :q] = -r / zn
-                Sn[q, q] = 1.0 / zn
-                Sinv = Sn
-                Vn = np.empty((n, q + 1))
-                Vn[:, :q] = V
-                Vn[:, q] = v
-                V = Vn
-                lam = np.append(lam, lam_p)
+                if q:
+                    Sinv[:q, :q] += np.outer(r, r / zn)
+                    Sinv[:q, q] = Sinv[q, :q] = -r / zn
+                Sinv[q, q] = 1.0 / zn
+                VT[q] = v
+                lam[q] = lam_p
+                q += 1
                 active.append(p)
                 added = True
             else:
                 # Drop the active constraint whose multiplier reached zero; keep adding p.
                 # Inverse of S without row/column k: M_-k,-k - M_-k,k M_k,-k / M_kk.
-                keep = np.arange(Sinv.shape[0]) != k
-                col = Sinv[keep, k]
-                Sinv = Sinv[np.ix_(keep, keep)] - np.outer(col, col) / Sinv[k, k]
+                keep = np.arange(q) != k
+                col = Sinv[:q, k][keep]
+                Sinv[: q - 1, : q - 1] = (
+                    Sinv[:q, :q][np.ix_(keep, keep)] - np.outer(col, col) / Sinv[k, k]
+                )
+                VT[k : q - 1] = VT[k + 1 : q].copy()
+                lam[k : q - 1] = lam[k + 1 : q].copy()
+                q -= 1
                 del active[k]
-                lam = lam[keep]
-                V = V[:, keep]
         if not added:
             break
         s = slacks(x)
+    lam = lam[:q]
     # Multipliers in the H x + g + C' z_in + z_box = 0 convention: a lower bound's normal is
     # +row, its multiplier enters with a minus sign; an upper bound's with a plus sign.
     z_rows = np.zeros(mn)
