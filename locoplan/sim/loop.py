@@ -17,10 +17,16 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from locoplan.control.controller import ControllerSettings, LocoManipulationController
+from locoplan.control.controller import (
+    ControllerSettings,
+    ControlOutput,
+    LocoManipulationController,
+)
 from locoplan.exceptions import SimulationError, SolverFailure
 from locoplan.log.writer import RunLogWriter, Transform
 from locoplan.plan import Plan
+from locoplan.render.samples import RenderSample, TaskTimeline
+from locoplan.render.view_log import ViewLogger, sample_from_data
 from locoplan.robot.description import RobotDescription
 from locoplan.robot.pinocchio_model import PinocchioRobot
 from locoplan.sim.backend import MujocoBackend
@@ -127,6 +133,7 @@ class ClosedLoop:
         self._next_record = 0.0
         self._events = plan.events
         self._next_event = 0
+        self._init_view()
         if log is not None:
             log.joint_limits(
                 list(desc.joint_names),
@@ -201,6 +208,7 @@ class ClosedLoop:
         wall0 = time.perf_counter()
         split = {"physics": 0.0, "dynamics": 0.0, "mpc": 0.0, "wbc": 0.0, "logging": 0.0}
         last_progress = 0.0
+        self._view_start()
         try:
             out = None
             for i in range(n_steps):
@@ -244,6 +252,7 @@ class ClosedLoop:
                     rec.joint_torque.append(applied)
                     rec.stance.append(out.stance)
                     self._record(be.time, applied, None)
+                    self._view_sample(be.time, out, applied)
                     if self.log is not None and out.mpc is not None:
                         self.log.json(
                             "/mpc/solution",
@@ -282,6 +291,33 @@ class ClosedLoop:
             rec.wall_time = time.perf_counter() - wall0
             rec.tick_split_s = split
         return rec
+
+    # -- what the video and the Foxglove 3D scene need (locoplan.render) --------------------
+    def _init_view(self) -> None:
+        """`on_sample` receives every recorded `RenderSample` (t = 0 first), e.g. a video
+        recorder; with a log, `ViewLogger` writes them and the 3D scene topics."""
+        self.on_sample: Callable[[RenderSample], None] | None = None
+        self._timeline = TaskTimeline.from_plan(self.plan)
+        self._view = None if self.log is None else ViewLogger(self.scene, self.plan, self.log)
+
+    def _view_start(self) -> None:
+        d = self.backend.data
+        t = self.backend.time
+        stance = (bool(self.plan.foot_stance(0, t)), bool(self.plan.foot_stance(1, t)))
+        sample = sample_from_data(t, d, stance, self._timeline.label_at(t))
+        if self.on_sample is not None:
+            self.on_sample(sample)
+        if self._view is not None:
+            self._view.start(sample, d)
+
+    def _view_sample(self, t: float, out: ControlOutput, tau: FloatArray) -> None:
+        d = self.backend.data
+        sample = sample_from_data(t, d, out.stance, self._timeline.label_at(t))
+        if self.on_sample is not None:
+            self.on_sample(sample)
+        if self._view is not None:
+            com = None if out.mpc is None else np.asarray(out.mpc.X)[:, 3:6]
+            self._view.sample(sample, d, self.backend.foot_contact_forces(), com, tau)
 
     def _fallen(self) -> bool:
         pos = self.backend.base_position()
