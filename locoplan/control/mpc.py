@@ -269,6 +269,8 @@ class _Kernel:
     K_cols: FloatArray
     C: FloatArray
     E: FloatArray
+    CT: FloatArray
+    ET: FloatArray
     RzT: FloatArray
     Iinv: FloatArray
 
@@ -309,7 +311,15 @@ def _build_kernel(
     K[:, :, 5, 5] = diag_v[..., 2]
     K_cols = np.ascontiguousarray(K.transpose(1, 0, 2, 3).reshape(N, 6 * N, 6))
     Iinv = np.swapaxes(RzT, 1, 2) @ Ib_inv @ RzT
-    return _Kernel(K_cols=K_cols, C=C, E=E, RzT=RzT, Iinv=Iinv)
+    return _Kernel(
+        K_cols=K_cols,
+        C=C,
+        E=E,
+        CT=np.ascontiguousarray(np.swapaxes(C, 1, 2)),
+        ET=np.ascontiguousarray(np.swapaxes(E, 1, 2)),
+        RzT=RzT,
+        Iinv=Iinv,
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -432,16 +442,26 @@ def propagate(
     """
     N = RzT.shape[0]
     g0 = x0[srbd.GRAV]
-    a_w = np.zeros((N, 3)) if tau is None else dt * np.einsum("kij,kj->ki", Iinv, tau)
-    a_v = np.broadcast_to(dt * g0, (N, 3)) if force is None else dt * (force / mass[:, None] + g0)
-    Om = np.cumsum(a_w, axis=0)
-    V = np.cumsum(a_v, axis=0)
+    # a[:, 0:3] the omega kicks, a[:, 3:6] the velocity kicks of each step.
+    a = np.empty((N, 6))
+    if tau is None:
+        a[:, 0:3] = 0.0
+    else:
+        a[:, 0:3] = dt * (Iinv @ tau[:, :, None])[:, :, 0]
+    if force is None:
+        a[:, 3:6] = dt * g0
+    else:
+        a[:, 3:6] = dt * (force / mass[:, None] + g0)
+    WV = np.cumsum(a, axis=0)  # omega and velocity changes after each step
+    w0v0 = x0[6:12]  # [omega; pdot], contiguous in the state
+    mid = w0v0 + WV - 0.5 * a  # mean omega and velocity over each step
+    rates = np.empty((N, 6))
+    rates[:, 0:3] = (RzT @ mid[:, 0:3, None])[:, :, 0]
+    rates[:, 3:6] = mid[:, 3:6]
+    TP = dt * np.cumsum(rates, axis=0)  # Theta and position changes
     X = np.empty((N, srbd.NX))
-    X[:, srbd.OMEGA] = x0[srbd.OMEGA] + Om
-    X[:, srbd.VEL] = x0[srbd.VEL] + V
-    X[:, srbd.POS] = x0[srbd.POS] + np.cumsum(dt * (x0[srbd.VEL] + V - 0.5 * a_v), axis=0)
-    w_mid = x0[srbd.OMEGA] + Om - 0.5 * a_w
-    X[:, srbd.THETA] = x0[srbd.THETA] + dt * np.cumsum(np.einsum("kij,kj->ki", RzT, w_mid), axis=0)
+    X[:, 0:6] = x0[0:6] + TP
+    X[:, 6:12] = w0v0 + WV
     X[:, srbd.GRAV] = g0
     return X
 
@@ -535,19 +555,21 @@ class MultiContactMpc:
         Y = kern.K_cols @ Phi  # (N, 6N, 10): column block l of K Phi_bd
         Y2 = Y.transpose(1, 0, 2).reshape(N, 6, 10 * N)
         H = (np.swapaxes(Phi, 1, 2) @ Y2).reshape(10 * N, 10 * N)
-        H[np.diag_indices_from(H)] += self._r_full
+        H.reshape(-1)[:: 10 * N + 1] += self._r_full
         # Gradient: g_k = Phi_k' lambda_k with the adjoint lambda from suffix sums.
-        e = x_free - inp.x_ref
-        u_th = q[0:3] * e[:, srbd.THETA]
-        a_th = np.einsum("kji,kj->ki", kern.C, u_th)
-        lam_w = _suffix_sum(q[6:9] * e[:, srbd.OMEGA])
-        lam_w += dt * (_suffix_sum(a_th) - np.einsum("kji,kj->ki", kern.E, _suffix_sum(u_th)))
-        w_p = q[3:6] * e[:, srbd.POS]
+        qe = q[:12] * (x_free[:, :12] - inp.x_ref[:, :12])  # Q (x - x_ref), 12 weighted states
+        u_th, w_p = qe[:, 0:3], qe[:, 3:6]
         k_idx = np.arange(N, dtype=np.float64)[:, None]
-        lam_v = _suffix_sum(q[9:12] * e[:, srbd.VEL])
-        lam_v += dt * (_suffix_sum(k_idx * w_p) - (k_idx - 0.5) * _suffix_sum(w_p))
-        lam = np.concatenate([lam_w, lam_v], axis=1)
-        g = np.einsum("kia,ki->ka", Phi, lam).reshape(-1)
+        Z = np.empty((N, 12))
+        Z[:, 0:3] = qe[:, 6:9] + dt * (kern.CT @ u_th[:, :, None])[:, :, 0]
+        Z[:, 3:6] = u_th
+        Z[:, 6:9] = qe[:, 9:12] + dt * k_idx * w_p
+        Z[:, 9:12] = w_p
+        SZ = _suffix_sum(Z)
+        lam = np.empty((N, 6))
+        lam[:, 0:3] = SZ[:, 0:3] - dt * (kern.ET @ SZ[:, 3:6, None])[:, :, 0]
+        lam[:, 3:6] = SZ[:, 6:9] - dt * (k_idx - 0.5) * SZ[:, 9:12]
+        g = (lam[:, None, :] @ Phi).reshape(-1)
         cols = st.cols
         if cols.shape[0] != 10 * N:
             H = H.take(cols, axis=0).take(cols, axis=1)

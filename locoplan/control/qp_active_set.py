@@ -33,10 +33,10 @@ _trsv = scipy.linalg.get_blas_funcs("trsv", dtype=np.float64)
 _trsm = scipy.linalg.get_blas_funcs("trsm", dtype=np.float64)
 
 
-def _chol_solve(U: FloatArray, b: FloatArray) -> FloatArray:
-    """H^-1 b from the upper Cholesky factor U (H = U'U), two BLAS triangular solves (faster
+def _chol_solve(L: FloatArray, b: FloatArray) -> FloatArray:
+    """H^-1 b from the lower Cholesky factor L (H = L L'), two BLAS triangular solves (faster
     than LAPACK potrs for one right-hand side at this size)."""
-    return np.asarray(_trsv(U, _trsv(U, b, trans=1), trans=0))
+    return np.asarray(_trsv(L, _trsv(L, b, lower=1, trans=0), lower=1, trans=1))
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,7 +99,9 @@ def _start_from_guess(
     box = np.flatnonzero(~in_c)
     N_A[row[box] - m, box] = 1.0
     N_A[:, upper] *= -1.0
-    V_all = np.asarray(_trsm(1.0, factor, _trsm(1.0, factor, N_A, trans_a=1), trans_a=0))
+    V_all = np.asarray(
+        _trsm(1.0, factor, _trsm(1.0, factor, N_A, lower=1, trans_a=0), lower=1, trans_a=1)
+    )
     S_all = N_A.T @ V_all
     keep = np.ones(cand.shape[0], dtype=bool)
     for _ in range(cand.shape[0]):
@@ -165,7 +167,9 @@ def solve_dual_active_set(
         lo[m:] = x_lower
     if x_upper is not None:
         hi[m:] = x_upper
-    factor, info = _potrf(H, lower=0, clean=0, overwrite_a=0)
+    # H is symmetric: its transpose is a column-major view, which LAPACK takes without a copy
+    # (the lower factorisation is also the faster one in OpenBLAS here: 124 vs 166 us, n 200).
+    factor, info = _potrf(np.asarray(H).T, lower=1, clean=0, overwrite_a=0)
     if info != 0:
         nan = np.full(n, np.nan)
         return ActiveSetResult("not_positive_definite", nan, 0, 0, np.zeros(m), np.zeros(n), np.inf)
@@ -191,19 +195,22 @@ def solve_dual_active_set(
     active: list[int] = []
     # Buffers: rows of VT are the columns of V = H^-1 N_A; Sinv = (N_A' H^-1 N_A)^-1 is
     # kept by bordering (add) and its inverse formula (drop); q active constraints in use.
-    cap = n + 1  # at most n independent active constraints
+    # Small buffers, doubled when full (at most n independent constraints are active);
+    # large ones would cost page faults on every call.
+    q = 0
+    guess = None
+    if initial_active is not None:
+        guess = _start_from_guess(factor, x, C, m, n, lo, hi, initial_active)
+    cap = min(n, max(16, 2 * len(guess[0]) if guess is not None else 0))
     VT = np.empty((cap, n))
     Sinv = np.empty((cap, cap))
     lam = np.empty(cap)
-    q = 0
-    if initial_active is not None:
-        guess = _start_from_guess(factor, x, C, m, n, lo, hi, initial_active)
-        if guess is not None:
-            active, lam0, V0, Sinv0, x = guess
-            q = len(active)
-            VT[:q] = V0.T
-            Sinv[:q, :q] = Sinv0
-            lam[:q] = lam0
+    if guess is not None:
+        active, lam0, V0, Sinv0, x = guess
+        q = len(active)
+        VT[:q] = V0.T
+        Sinv[:q, :q] = Sinv0
+        lam[:q] = lam0
     iterations = 0
     status = "max_iterations"
     s = slacks(x)
@@ -253,6 +260,13 @@ def solve_dual_active_set(
             lam[:q] -= t * r
             lam_p += t
             if t2 <= t1:
+                if q == cap:
+                    cap = min(n, 2 * cap)
+                    VT = np.concatenate([VT[:q], np.empty((cap - q, n))])
+                    Sn = np.empty((cap, cap))
+                    Sn[:q, :q] = Sinv[:q, :q]
+                    Sinv = Sn
+                    lam = np.concatenate([lam[:q], np.empty(cap - q)])
                 # Add p. Bordering: with w = S^-1 b = r and delta = zn,
                 # [[S, b], [b', c]]^-1 = [[S^-1 + r r'/delta, -r/delta], [-r'/delta, 1/delta]].
                 if q:
