@@ -34,3 +34,9 @@ bench: install
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache .mypy_cache .ruff_cache
+
+# docs/results.md and docs/results/<experiment>/*.png from scenarios/ (the paper's five
+# experiments, closed loop; about 1-2 min on 2 cores). Logs go to runs/results/.
+.PHONY: results
+results: install
+	OMP_NUM_THREADS=1 $(BIN)/python scripts/results.py --scenarios scenarios --doc docs/results.md --figures docs/results --runs runs/results
