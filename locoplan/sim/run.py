@@ -13,13 +13,14 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from locoplan.control.contact import ContactLimits
 from locoplan.control.controller import ControllerSettings
 from locoplan.control.mpc import MpcSettings
+from locoplan.exceptions import LocoplanError
 from locoplan.log.writer import RunLogWriter
 from locoplan.metrics import (
     TaskGoal,
@@ -31,10 +32,14 @@ from locoplan.metrics import (
     yaw_difference_deg,
 )
 from locoplan.plan import Plan, compile_plan
+from locoplan.render.samples import RenderSample
 from locoplan.robot.description import RobotDescription, load_robot_description
 from locoplan.scenario import Scenario
 from locoplan.sim.loop import ClosedLoop, Push, RunRecord
 from locoplan.sim.scene import FixtureDef, ObjectDef, Scene, build_scene
+
+if TYPE_CHECKING:
+    from locoplan.render.video import VideoStats
 
 ON_FIXTURE_TOL = 0.03  # m: object bottom within this of a fixture's top counts as resting on it
 
@@ -43,7 +48,8 @@ ON_FIXTURE_TOL = 0.03  # m: object bottom within this of a fixture's top counts 
 class RunOptions:
     """How to run: strategy/model override the script's; `duration_scale` stretches every
     task time and `end` (K > 1 is slower); `mapping` and `qp_backend` select the torque mapping
-    and QP solver; `pushes` are trunk disturbances (tests, robustness studies)."""
+    and QP solver; `pushes` are trunk disturbances (tests, robustness studies); `video` also
+    renders the run into that MP4 (`locoplan.render`; up to the failure when the run breaks)."""
 
     strategy: str | None = None
     model: str | None = None
@@ -55,17 +61,20 @@ class RunOptions:
     f_min: float | None = None
     pushes: tuple[Push, ...] = ()
     log_name: str | None = None
+    video: Path | None = None
 
 
 @dataclass(frozen=True, slots=True)
 class RunResult:
-    """Metrics (the contract's JSON keys), the raw record and the log path."""
+    """Metrics (the contract's JSON keys), the raw record, the log path (and the video's
+    stats with `RunOptions.video`)."""
 
     metrics: dict[str, Any]
     record: RunRecord
     plan: Plan
     log_path: Path | None
     passed: bool
+    video: VideoStats | None = None
 
 
 def scene_for(scenario: Scenario, desc: RobotDescription) -> Scene:
@@ -277,8 +286,39 @@ def run_scenario(
             log=writer,
             pushes=options.pushes,
         )
-        rec = loop.run(plan.t_end, _Progress(progress, plan.t_end))
+        samples: list[RenderSample] = []
+        rec = _run_recording(loop, plan.t_end, _Progress(progress, plan.t_end), options, samples)
         metrics = compute_metrics(scenario, plan, rec, options, log_path)
         if writer is not None:
             writer.finish(metrics)
-    return RunResult(metrics, rec, plan, log_path, bool(metrics["passed"]))
+    video = None if options.video is None else _write_video(scene, samples, options.video)
+    return RunResult(metrics, rec, plan, log_path, bool(metrics["passed"]), video)
+
+
+# -- run --video (locoplan.render) -----------------------------------------------------------
+def _run_recording(
+    loop: ClosedLoop,
+    t_end: float,
+    progress: _Progress,
+    options: RunOptions,
+    samples: list[RenderSample],
+) -> RunRecord:
+    """`loop.run`, collecting the video's samples with `options.video`; when the run breaks,
+    the video up to the failure is written before the error goes on (rendering waits until
+    the loop ends, so it never counts in the run's wall time)."""
+    if options.video is None:
+        return loop.run(t_end, progress)
+    loop.on_sample = samples.append
+    try:
+        return loop.run(t_end, progress)
+    except LocoplanError:
+        # The run's own error is what the caller must see, not a rendering problem.
+        with contextlib.suppress(LocoplanError, OSError):
+            _write_video(loop.scene, samples, options.video)
+        raise
+
+
+def _write_video(scene: Scene, samples: list[RenderSample], path: Path) -> VideoStats:
+    from locoplan.render.video import write_video
+
+    return write_video(scene.model, scene.robot.trunk_body, samples, path)
