@@ -4,15 +4,28 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install run test lint types pytest bench clean
+.PHONY: install system-packages run test lint types pytest bench clean
 
 install: $(STAMP)
 
 $(STAMP): pyproject.toml
+	$(MAKE) --no-print-directory system-packages
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
+
+# Software OpenGL for headless video (`run --video`, `render`): Mesa's EGL (llvmpipe), and
+# OSMesa as the MUJOCO_GL=osmesa alternative. Installed only as root with apt-get; elsewhere
+# the render commands name the packages when they are missing.
+GL_PACKAGES := libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
+
+system-packages:
+	@if command -v apt-get >/dev/null 2>&1 && [ "$$(id -u)" = 0 ]; then \
+	  dpkg -s $(GL_PACKAGES) >/dev/null 2>&1 || \
+	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(GL_PACKAGES); } || \
+	  echo "warning: could not install $(GL_PACKAGES); video rendering will not work" >&2; \
+	fi
 
 run: install
 	$(BIN)/locoplan run scenarios/package-transfer.yaml
