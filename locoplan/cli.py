@@ -280,6 +280,13 @@ def run_command(
         None, "--f-min", metavar="N", help="Minimum vertical force per stance foot (default 10 N)."
     ),
     debug: bool = typer.Option(False, "--debug", help="Show Python tracebacks of failures."),
+    video: str | None = typer.Option(
+        None,
+        "--video",
+        metavar="PATH.mp4",
+        help="Also render the run into an MP4 (headless, 30 fps; see 'locoplan render').",
+        callback=lambda value: _check_video_option(value),
+    ),
 ) -> None:
     """Run one task script closed loop in MuJoCo (multi-contact MPC + WBC).
 
@@ -328,6 +335,7 @@ def run_command(
         mapping=mapping,
         qp_backend=qp_backend,
         f_min=f_min,
+        video=None if video is None else Path(video),
     )
     show = not quiet and out.is_terminal
     restore = install_termination_handlers()
@@ -912,6 +920,133 @@ def compare_command(
             err.print("(no traceback: the failure happened in a worker run)", markup=False)
         raise typer.Exit(EXIT_RUN_BROKE)
     raise typer.Exit(EXIT_OK if comparison.passed else EXIT_EXPECTATION)
+
+
+# --- render / inspect -----------------------------------------------------------------------
+
+
+def _check_video_option(value: str | None) -> str | None:
+    """Fail fast (exit 2, before any simulation) when a video cannot be written to `value`."""
+    if value is None:
+        return None
+    from pathlib import Path
+
+    from locoplan.render.errors import RenderError
+    from locoplan.render.gl import gl_backend
+
+    path = Path(value)
+    if path.suffix.lower() != ".mp4":
+        _fail(EXIT_BAD_INPUT, f"--video needs a .mp4 path, got {value}")
+    if path.is_dir():
+        _fail(EXIT_BAD_INPUT, f"--video {value} is a directory")
+    try:
+        import imageio_ffmpeg  # noqa: F401  (the encoder the video needs)
+
+        gl_backend()
+    except ImportError:
+        _fail(EXIT_BAD_INPUT, "the video encoder is missing: pip install 'imageio-ffmpeg~=0.8'")
+    except RenderError as exc:
+        _fail(EXIT_BAD_INPUT, str(exc))
+    return value
+
+
+def _read_log_or_exit(path: str) -> object:
+    """`read_log(path)`, or exit 2 saying why the file is not a readable log."""
+    from locoplan.log.reader import LogReadError, read_log
+
+    try:
+        return read_log(path)
+    except FileNotFoundError:
+        _fail(EXIT_BAD_INPUT, f"{path}: no such file")
+    except IsADirectoryError:
+        _fail(EXIT_BAD_INPUT, f"{path}: is a directory, not an MCAP log")
+    except LogReadError as exc:
+        _fail(EXIT_BAD_INPUT, str(exc))
+    except OSError as exc:
+        _fail(EXIT_BAD_INPUT, f"{path}: cannot read: {exc.strerror or exc}")
+
+
+_LOG_FILE = typer.Argument(..., metavar="LOG.mcap", help="A run's MCAP log (locoplan run).")
+
+
+@app.command("render")
+def render_command(
+    log_path: str = _LOG_FILE,
+    video: str = typer.Option(
+        ..., "--video", metavar="PATH.mp4", help="Where to write the MP4.", show_default=False
+    ),
+    debug: bool = typer.Option(False, "--debug", help="Show Python tracebacks of failures."),
+) -> None:
+    """Render a saved run into an MP4, from its log alone (no re-simulation).
+
+    The scene is rebuilt from the scenario stored in the log and posed from the
+    logged states (/sim/qpos) at 30 fps, 640x480, with the same camera and overlay
+    as 'locoplan run --video', so both give the same frames. A log cut short
+    (the run broke, or its process was killed) is rendered up to where it ends.
+    Needs software OpenGL: Mesa EGL (Debian: libegl1 libegl-mesa0 libgl1-mesa-dri),
+    or MUJOCO_GL=osmesa with libosmesa6.
+    Exit status 0, or 2 when the file is not a renderable locoplan log or
+    rendering is not possible here.
+
+    Examples:
+
+      locoplan render runs/pick-walk-drop.mcap --video pick-walk-drop.mp4
+
+      MUJOCO_GL=osmesa locoplan render runs/turn.mcap --video turn.mp4
+    """
+    from locoplan.log.reader import RunLog
+    from locoplan.render.errors import RenderError
+    from locoplan.render.from_log import render_log
+
+    _check_video_option(video)
+    log = _read_log_or_exit(log_path)
+    assert isinstance(log, RunLog)
+    try:
+        stats, _ = render_log(log.path, video)
+    except RenderError as exc:
+        if debug:
+            raise
+        _fail(EXIT_BAD_INPUT, f"cannot render: {exc}")
+    span = "" if stats.t_last is None else f", t = 0 .. {stats.t_last:.2f} s"
+    note = "" if log.complete else " (the log is incomplete: rendered up to its end)"
+    err.print(
+        f"wrote {video}: {stats.frames} frames {stats.width}x{stats.height} at {stats.fps} fps"
+        f"{span}{note}; {stats.render_ms_median:.1f} ms per frame ({stats.backend})",
+        markup=False,
+    )
+
+
+@app.command("inspect")
+def inspect_command(
+    log_path: str = _LOG_FILE,
+    as_json: bool = typer.Option(
+        False, "--json", help="Print the log summary as JSON instead of tables."
+    ),
+) -> None:
+    """Show what a run's MCAP log holds: scenario, metrics, topics and duration.
+
+    Reads the log alone (the scenario and metrics are stored in it). Works on logs
+    of runs that broke or were killed, and says so.
+    Exit status 0, or 2 when the file is not an MCAP log.
+
+    Examples:
+
+      locoplan inspect runs/package-transfer.mcap
+
+      locoplan inspect runs/throw.mcap --json | jq .metrics.passed
+    """
+    import json
+
+    from locoplan.log.reader import RunLog, log_summary
+    from locoplan.report.inspect_table import inspect_renderables
+
+    log = _read_log_or_exit(log_path)
+    assert isinstance(log, RunLog)
+    if as_json:
+        out.print(json.dumps(log_summary(log.path), indent=2), markup=False, highlight=False)
+        return
+    for item in inspect_renderables(log):
+        out.print(item)
 
 
 def main() -> None:
