@@ -48,6 +48,8 @@ from locoplan.robot.pinocchio_model import PinocchioRobot
 FloatArray = npt.NDArray[np.float64]
 
 GRAVITY = 9.81
+LOAD_RAMP = 0.8  # s over which a lifted (or placed) object's weight comes on (goes off)
+LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
 FEET = ("L", "R")
 
 
@@ -267,11 +269,10 @@ class LocoManipulationController:
                     if t_td not in cache:
                         cache[t_td] = self._foothold(k, t, t_td, p_c, v_c)
                     p_feet[i, k], foot_yaw[i, k] = cache[t_td]
-        held = np.asarray(self.plan.object_held(times), dtype=bool)
-        obj_mass = np.asarray(self.plan.held_mass(times), dtype=float)
+        obj_mass = self.carried_mass(times)
+        held = obj_mass > 0.0
         p_obj = np.asarray(self.plan.object_positions(times, p_base_ref, yaw_ref), dtype=float)
-        if held.any():
-            x_ref[:, 3:5] += self._load_shift(obj_mass, p_obj, p_ref, held)
+        x_ref[:, 3:5] += self._com_shift(times)
         inp = MpcInput(
             x0=x0,
             x_ref=x_ref,
@@ -289,21 +290,51 @@ class LocoManipulationController:
         )
         return self.mpc.update(inp)
 
-    def _load_shift(
-        self,
-        obj_mass: FloatArray,
-        p_obj: FloatArray,
-        p_com: FloatArray,
-        held: npt.NDArray[np.bool_],
-    ) -> FloatArray:
-        """CoM reference shift (n, 2) that puts the combined CoM of robot and held object over
-        the support centre: (m p_c + m_o p_o) = (m + m_o) s with p_o = p_c + d gives
+    def carried_mass(self, times: FloatArray) -> FloatArray:
+        """Mass (kg) the hands carry at `times` (n,): each held object's mass times a load
+        fraction that rises smoothly over LOAD_RAMP after the planned lift-off and falls over
+        LOAD_RAMP before a drop's release (a throw lets go at once).
+
+        Why a ramp rather than the plan's 0/1 sigma_e: a step in the load makes the CoM
+        reference jump back by m_o d / (m + m_o) (11 cm for 8 kg). The MPC answered such a jump
+        with a first-step vertical force far below the weight followed by large ones (it buys
+        friction for a big backward Fx); re-planning every 10 ms applies only that first step,
+        so the robot sagged 7 cm and dropped the load. Lifting transfers the weight gradually
+        in reality too: the hands take it as they pull up."""
+        t = np.asarray(times, dtype=float)
+        out = np.zeros(t.shape)
+        for h in self.plan.holds:
+            up = np.clip((t - h.lift) / LOAD_RAMP, 0.0, 1.0)
+            frac = up * up * (3.0 - 2.0 * up)
+            if math.isfinite(h.release):
+                if h.release_kind == "throw":
+                    frac = np.where(t < h.release, frac, 0.0)
+                else:
+                    down = np.clip((h.release - t) / LOAD_RAMP, 0.0, 1.0)
+                    frac = frac * down * down * (3.0 - 2.0 * down)
+            out += h.mass * frac
+        return out
+
+    def _com_shift(self, times: FloatArray) -> FloatArray:
+        """CoM reference shift (n, 2) for held loads: the combined CoM of robot and object over
+        the support centre. (m p_c + m_o p_o) = (m + m_o) s with p_o = p_c + d gives
         p_c = s - m_o d / (m + m_o). Without it the MPC, which sees only 0.6 s ahead, does not
-        find the backward lean a held load needs (shared/controller-notes.md)."""
+        find the backward lean a held load needs (shared/controller-notes.md).
+
+        The shift leads the load by LOAD_LEAD: with the CoM still over the feet when an 8 kg
+        load 0.35 m ahead comes on, its pitch torque (27 N m) exceeds what the line feet can
+        answer (toe-loaded CoP, 0.09 m x 245 N = 22 N m), and moving the CoM back then needs a
+        backward push whose own pitch torque makes it worse. So the robot starts leaning back
+        (onto its heels, which is feasible without the load) just before the weight comes on."""
+        t_lead = np.asarray(times, dtype=float) + LOAD_LEAD
+        mass = self.carried_mass(t_lead)
+        out = np.zeros((t_lead.shape[0], 2))
+        if not np.any(mass > 0.0):
+            return out
+        p_com, _, yaw, _, p_base = self._com_reference(t_lead)
+        p_obj = np.asarray(self.plan.object_positions(t_lead, p_base, yaw), dtype=float)
         d = p_obj[:, :2] - p_com[:, :2]
-        shift = -(obj_mass / (self.mass + obj_mass))[:, None] * d
-        shift[~held] = 0.0
-        return shift
+        return -(mass / (self.mass + mass))[:, None] * d
 
     # -- the tick ------------------------------------------------------------------------------
     def step(self, t: float, q: FloatArray, v: FloatArray) -> ControlOutput:
@@ -386,7 +417,14 @@ class LocoManipulationController:
         J_hands = [r.frame_jacobian(h) for h in self.desc.hand_frames]
         p_hands = np.array([r.frame_position(h) for h in self.desc.hand_frames])
         v_hands = [J[:3] @ v for J in J_hands]
-        tau_ext = self._object_generalized_force(t, J_hands)
+        hand_acc = np.array(
+            [
+                self.s.hand_kp_acc * (hand_targets[k] - p_hands[k])
+                + self.s.hand_kd_acc * (v_hand_des[k] - v_hands[k])
+                for k in range(2)
+            ]
+        )
+        tau_ext = self._object_generalized_force(t, J_hands, hand_acc)
 
         t_w = time.perf_counter()
         wbc_out: WbcOutput | None = None
@@ -421,10 +459,7 @@ class LocoManipulationController:
                 R_feet,
                 swing_acc,
                 J_hands,
-                p_hands,
-                v_hands,
-                hand_targets,
-                v_hand_des,
+                hand_acc,
             )
             qdd_cmd = prioritized_acceleration(tasks, 22)
             contacts = []
@@ -457,16 +492,25 @@ class LocoManipulationController:
         )
 
     # -- pieces ---------------------------------------------------------------------------------
-    def _object_generalized_force(self, t: float, J_hands: list[FloatArray]) -> FloatArray:
-        """J_e' F_ext: the held object's weight, shared by the holding hands (nv,)."""
+    def _object_generalized_force(
+        self, t: float, J_hands: list[FloatArray], hand_acc: FloatArray
+    ) -> FloatArray:
+        """J_e' F_ext (nv,): what the held object does to the holding hands, shared equally:
+        its weight and its inertia at the hands' commanded accelerations,
+        F_hand = (m_o / n) (g - a_hand). The pinocchio model does not contain the object, so
+        without the inertial part the hand tasks act as if the hands were empty and lag a
+        heavy load."""
         tau_ext = np.zeros(22)
-        mass = self.plan.held_mass_at(t)
+        mass = float(self.carried_mass(np.array([t]))[0])
         if mass <= 0.0:
             return tau_ext
         hands = self.plan.holding_hands(t)
         if not hands:
             return tau_ext
-        f = np.array([0.0, 0.0, -mass * GRAVITY / len(hands)])
+        # A rigid object held at the hand points moves with their mean; the hands' difference
+        # (the squeeze) only makes internal force and must not be fed forward as inertia.
+        a_obj = np.mean([hand_acc[k] for k in hands], axis=0)
+        f = mass / len(hands) * (np.array([0.0, 0.0, -GRAVITY]) - a_obj)
         for k in hands:
             tau_ext += J_hands[k][:3].T @ f
         return tau_ext
@@ -486,10 +530,7 @@ class LocoManipulationController:
         R_feet: list[FloatArray],
         swing: list[tuple[FloatArray, FloatArray, FloatArray, float]],
         J_hands: list[FloatArray],
-        p_hands: FloatArray,
-        v_hands: list[FloatArray],
-        hand_des: FloatArray,
-        hand_vel_des: FloatArray,
+        hand_acc: FloatArray,
     ) -> list[AccelerationTask]:
         r = self.robot
         s = self.s
@@ -519,15 +560,7 @@ class LocoManipulationController:
         )
         tasks.append(AccelerationTask(J_base[3:], dJv_base[3:], acc_rot))
         p_des = np.asarray(ref.position, dtype=float).copy()
-        m_o = float(self.plan.held_mass_at(t))
-        if m_o > 0.0:
-            p_obj = np.asarray(
-                self.plan.object_positions(np.array([t]), p_des[None, :], np.array([ref.yaw])),
-                dtype=float,
-            )
-            p_des[:2] += self._load_shift(np.array([m_o]), p_obj, p_des[None, :], np.array([True]))[
-                0
-            ]
+        p_des[:2] += self._com_shift(np.array([t]))[0]
         v_des = np.asarray(ref.velocity, dtype=float)
         v_base = R @ v[:3]
         acc_pos = np.asarray(s.trunk_kp_pos) * (p_des - q[:3]) + np.asarray(s.trunk_kd_pos) * (
@@ -555,12 +588,9 @@ class LocoManipulationController:
             rows_b.append(np.concatenate([dJv_feet[k][:3], aang[1:]]))
             rows_a.append(np.concatenate([a_lin, a_ang[1:]]))
         for k in range(2):
-            a_h = s.hand_kp_acc * (hand_des[k] - p_hands[k]) + s.hand_kd_acc * (
-                hand_vel_des[k] - v_hands[k]
-            )
             rows_J.append(J_hands[k][:3])
             rows_b.append(r.frame_jdot_v(self.desc.hand_frames[k])[:3])
-            rows_a.append(a_h)
+            rows_a.append(hand_acc[k])
         tasks.append(
             AccelerationTask(np.vstack(rows_J), np.concatenate(rows_b), np.concatenate(rows_a))
         )

@@ -2,8 +2,11 @@
 
 Grasp. A hand closes on an object when the plan says the hand reaches it (the pick's grasp
 instant) AND the hand really touches it in MuJoCo: every planned hand must be within
-GRASP_TOLERANCE of the object's surface. Closing switches on a weld equality between the
-hand's link and the object at their current relative pose (so nothing jumps or teleports);
+GRASP_TOLERANCE of the object's surface. Closing switches on a point connection (MuJoCo
+`connect` equality) between the hand point and the object at their current positions (so
+nothing jumps or teleports); hands are point contacts, as in the paper (3-D forces, no
+moments). A 6-D weld per hand was tried first: with 3-DoF arms, two welds close a kinematic
+loop with no mobility left, so the hands could not move the box and the arm torques blew up.
 from then on the object's weight reaches the robot through the hands in the physics. At the
 planned release instant (drop or throw) the welds are switched off. If the hands are not
 there by GRASP_WINDOW after the planned lift-off, the grasp fails (an event, and the object
@@ -110,18 +113,11 @@ class GraspManager:
         eq = self.scene.grasp_welds[(name, hand)]
         b1 = self.scene.hand_body_ids[hand]
         b2 = self.scene.object_body_ids[name]
-        # Weld data: anchor (3, in body2's frame), relpose = body2's pose in body1's frame
-        # (position 3, quaternion 4), torque scale (1).
-        R1 = data.xmat[b1].reshape(3, 3)
-        rel_pos = R1.T @ (data.xpos[b2] - data.xpos[b1])
-        q1_inv = np.zeros(4)
-        mujoco.mju_negQuat(q1_inv, data.xquat[b1])
-        rel_quat = np.zeros(4)
-        mujoco.mju_mulQuat(rel_quat, q1_inv, data.xquat[b2])
-        m.eq_data[eq, 0:3] = 0.0
-        m.eq_data[eq, 3:6] = rel_pos
-        m.eq_data[eq, 6:10] = rel_quat
-        m.eq_data[eq, 10] = 1.0
+        # Connect data: the anchor in body1's frame (3) and in body2's frame (3). Both are the
+        # hand point now, so the constraint starts satisfied.
+        p = data.site_xpos[self._hand_sites[hand]]
+        m.eq_data[eq, 0:3] = data.xmat[b1].reshape(3, 3).T @ (p - data.xpos[b1])
+        m.eq_data[eq, 3:6] = data.xmat[b2].reshape(3, 3).T @ (p - data.xpos[b2])
         data.eq_active[eq] = 1
 
 

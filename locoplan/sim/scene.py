@@ -129,12 +129,12 @@ def build_scene(
     hand_bodies = [spec.site(site).parent.name for site in robot.hand_frames]
     for ob in objects:
         for k, hand_body in enumerate(hand_bodies):
-            # Grasp = a weld between the hand's link and the object, switched on by the
+            # Grasp = a point connection between the hand and the object, switched on by the
             # simulator when the hand touches the object at the planned grasp time (see
-            # locoplan.sim.grasp); its relative pose is set at that instant so nothing jumps.
+            # locoplan.sim.grasp); its anchors are set at that instant so nothing jumps.
             spec.add_equality(
                 name=f"grasp_{ob.name}_{k}",
-                type=mujoco.mjtEq.mjEQ_WELD,
+                type=mujoco.mjtEq.mjEQ_CONNECT,
                 objtype=mujoco.mjtObj.mjOBJ_BODY,
                 name1=hand_body,
                 name2=f"object_{ob.name}",
