@@ -88,12 +88,16 @@ def record_inputs(
     seed: int = 0,
     period: float = 0.01,
     noise: float = 1.0,
+    object_mass: float = 0.0,
 ) -> list[MpcInput]:
     """Closed loop with the SRBD as plant; returns the MPC inputs met along the way.
 
     The MPC sees the state plus Gaussian noise of standard deviation ``noise`` x (0.5 deg,
     5 mm, 0.1 rad/s, 0.05 m/s) -- the size of the errors a whole-body loop leaves -- which
     makes a third to a half of the QPs have active constraints; with noise 0 almost none do.
+    ``object_mass`` (kg) is held 0.3 m ahead at CoM height with the CoM reference left above
+    the ankles: 5 kg needs the CoP 68 mm ahead of the ankle (toe 90 mm), so with the noise
+    the CoP bounds are often active over much of the horizon; 6 kg and more fall here.
     """
     rng = np.random.default_rng(seed)
     mpc = MultiContactMpc(MpcSettings())
@@ -104,12 +108,23 @@ def record_inputs(
         t = i * period
         x_meas = x.copy()
         x_meas[:12] += sigma * rng.normal(size=12)
-        inp = make_input(t, x_meas, schedule, inertia)
+        inp = make_input(t, x_meas, schedule, inertia, object_mass)
         inputs.append(inp)
         sol = mpc.update(inp)
         contact = schedule(np.array([t]))[0]
         u = np.concatenate([sol.U[0, 0, 0:3], sol.U[0, 1, 0:3], sol.U[0, 0, 3:5], sol.U[0, 1, 3:5]])
-        cm = srbd.continuous_model(0.0, x[srbd.POS], P_FEET, np.zeros(2), contact, MASS, inertia)
+        cm = srbd.continuous_model(
+            0.0,
+            x[srbd.POS],
+            P_FEET,
+            np.zeros(2),
+            contact,
+            MASS,
+            inertia,
+            object_mass > 0,
+            object_mass,
+            np.array([0.3, 0.0, Z_COM]),
+        )
         dm = srbd.discretize(cm, period)
         x = dm.A @ x + dm.B @ u + dm.d
         # Disturbance: a random push of a few newtons on the CoM over the period.
@@ -185,6 +200,9 @@ def main() -> None:
     scenarios = {
         "standing": record_inputs(standing_contact, args.updates, inertia, noise=args.noise),
         "stepping": record_inputs(stepping_contact, args.updates, inertia, noise=args.noise),
+        "stand+5kg": record_inputs(
+            standing_contact, args.updates, inertia, noise=args.noise, object_mass=5.0
+        ),
     }
     print(
         f"horizon {N}, dt {DT}, {args.updates} updates per scenario, noise {args.noise}, "

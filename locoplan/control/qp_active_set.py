@@ -77,7 +77,7 @@ def _start_from_guess(
     hi: FloatArray,
     ids: npt.ArrayLike,
 ) -> tuple[list[int], FloatArray, FloatArray, FloatArray, FloatArray] | None:
-    """Active set, multipliers, V, S^-1 and x for a guessed active set (see
+    """Active set, multipliers, W = L^-1 N_A, S = W'W and x for a guessed active set (see
     `solve_dual_active_set`), or None if nothing of the guess is usable."""
     mn = m + n
     cand = np.unique(np.asarray(ids, dtype=np.intp))
@@ -99,10 +99,8 @@ def _start_from_guess(
     box = np.flatnonzero(~in_c)
     N_A[row[box] - m, box] = 1.0
     N_A[:, upper] *= -1.0
-    V_all = np.asarray(
-        _trsm(1.0, factor, _trsm(1.0, factor, N_A, lower=1, trans_a=0), lower=1, trans_a=1)
-    )
-    S_all = N_A.T @ V_all
+    W_all = np.asarray(_trsm(1.0, factor, N_A, lower=1, trans_a=0))
+    S_all = W_all.T @ W_all
     keep = np.ones(cand.shape[0], dtype=bool)
     for _ in range(cand.shape[0]):
         S = S_all[np.ix_(keep, keep)]
@@ -118,13 +116,9 @@ def _start_from_guess(
             return None
     else:
         return None
-    V = V_all[:, keep]
-    try:
-        Sinv = np.asarray(scipy.linalg.inv(S), dtype=np.float64)
-    except (np.linalg.LinAlgError, ValueError):
-        return None
-    x = x_u + V @ lam
-    return [int(i) for i in cand[keep]], lam, V, Sinv, x
+    W = W_all[:, keep]
+    x = x_u + np.asarray(_trsv(factor, W @ lam, lower=1, trans=1))
+    return [int(i) for i in cand[keep]], lam, W, S, x
 
 
 def solve_dual_active_set(
@@ -205,12 +199,14 @@ def solve_dual_active_set(
     VT = np.empty((cap, n))
     Sinv = np.empty((cap, cap))
     lam = np.empty(cap)
+    pending: tuple[FloatArray, FloatArray] | None = None
     if guess is not None:
-        active, lam0, V0, Sinv0, x = guess
+        active, lam0, W0, S0, x = guess
         q = len(active)
-        VT[:q] = V0.T
-        Sinv[:q, :q] = Sinv0
         lam[:q] = lam0
+        # V = L^-T W and S^-1 only when an iteration needs them: a good guess often
+        # finishes at once.
+        pending = (W0, S0)
     iterations = 0
     status = "max_iterations"
     s = slacks(x)
@@ -221,6 +217,17 @@ def solve_dual_active_set(
             break
         if iterations >= max_iter:
             break
+        if pending is not None:
+            W0, S0 = pending
+            pending = None
+            try:
+                Sinv[:q, :q] = scipy.linalg.inv(S0)
+            except (np.linalg.LinAlgError, ValueError):
+                # Should not happen (S0 was factorised); restart cold.
+                x, q, active = -_chol_solve(factor, g), 0, []
+                s = slacks(x)
+                continue
+            VT[:q] = np.asarray(_trsm(1.0, factor, W0, lower=1, trans_a=1)).T
         n_p = normal(p)
         v = _chol_solve(factor, n_p)
         vn = float(v @ n_p)
