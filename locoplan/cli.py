@@ -926,13 +926,14 @@ def compare_command(
 
 
 def _check_video_option(value: str | None) -> str | None:
-    """Fail fast (exit 2, before any simulation) when a video cannot be written to `value`."""
+    """Fail fast (exit 2, before any simulation) when a video cannot be written to `value`:
+    not an .mp4 path, no encoder, or no OpenGL (a tiny context is opened to find out)."""
     if value is None:
         return None
     from pathlib import Path
 
     from locoplan.render.errors import RenderError
-    from locoplan.render.gl import gl_backend
+    from locoplan.render.gl import check_gl
 
     path = Path(value)
     if path.suffix.lower() != ".mp4":
@@ -942,7 +943,7 @@ def _check_video_option(value: str | None) -> str | None:
     try:
         import imageio_ffmpeg  # noqa: F401  (the encoder the video needs)
 
-        gl_backend()
+        check_gl()
     except ImportError:
         _fail(EXIT_BAD_INPUT, "the video encoder is missing: pip install 'imageio-ffmpeg~=0.8'")
     except RenderError as exc:
@@ -1010,7 +1011,8 @@ def render_command(
     span = "" if stats.t_last is None else f", t = 0 .. {stats.t_last:.2f} s"
     note = "" if log.complete else " (the log is incomplete: rendered up to its end)"
     err.print(
-        f"wrote {video}: {stats.frames} frames {stats.width}x{stats.height} at {stats.fps} fps"
+        f"wrote {video}: {stats.frames} frame{'' if stats.frames == 1 else 's'} "
+        f"{stats.width}x{stats.height} at {stats.fps} fps"
         f"{span}{note}; {stats.render_ms_median:.1f} ms per frame ({stats.backend})",
         markup=False,
     )

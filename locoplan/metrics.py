@@ -112,7 +112,8 @@ def goal_times(
     for k, g in enumerate(goals):
         if g.action in ("stand", "step"):
             ok = fall_time is None or fall_time > g.end
-            out.append(g.end if ok and t.size and t[-1] >= g.end - 1e-9 else None)
+            # Samples come every 10 ms: the last one may fall just short of the end.
+            out.append(g.end if ok and t.size and t[-1] >= g.end - 0.02 else None)
         elif g.action in ("walk", "turn"):
             assert g.target_position is not None and g.target_yaw is not None
             d = np.linalg.norm(base_xy - g.target_position[:2], axis=1)

@@ -230,7 +230,11 @@ class LocoManipulationController:
         yaw_td = float(yaw_ref[1])
         off = rot_z(yaw_td) @ self.foot_offset_from_com[k]
         stance_time = self.plan.gait_period_at(t_td) / 2.0
+        # Relative to where the CoM would be without the held-load shift: the feet must keep
+        # the support centre under the planned trunk, with the CoM shifted back over them
+        # (placing them relative to the shifted CoM walked the robot backwards under a load).
         p = p_c + (p_ref[1] - p_ref[0]) + off
+        p[:2] -= self._com_shift(np.array([t]))[0]
         p[:2] += v_ref[1, :2] * stance_time / 2.0 + self.s.raibert_gain * (v_c[:2] - v_ref[0, :2])
         p[2] = 0.0
         return p, yaw_td

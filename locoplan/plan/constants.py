@@ -61,7 +61,7 @@ THROW_RELEASE_OFFSET: Final = 0.10
 HAND_DEFAULT_IN_TRUNK: Final = (0.28, 0.12, -0.05)
 # Carry pose of a held object's centre in trunk (m): ahead of and slightly below the origin.
 CARRY_FORWARD: Final = 0.30
-CARRY_HEIGHT: Final = -0.02
+CARRY_HEIGHT: Final = 0.02
 # Pre-grasp clearance outside the object's sides (m).
 GRASP_CLEARANCE: Final = 0.03
 # The contact targets lie this far inside the object's sides, so that the hands' Cartesian PD

@@ -105,7 +105,7 @@ class GraspManager:
                     data.eq_active[self.scene.grasp_welds[(name, k)]] = 0
                 hs.state = "released"
                 hs.release_time = t
-                events.append(("release", {"object": name, "kind": h.release_kind or ""}))
+                events.append(("release", {"object": name, "how": h.release_kind or ""}))
         return events
 
     def _close(self, name: str, hand: int, data: mujoco.MjData) -> None:

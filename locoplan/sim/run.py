@@ -23,6 +23,8 @@ from locoplan.control.mpc import MpcSettings
 from locoplan.exceptions import LocoplanError
 from locoplan.log.writer import RunLogWriter
 from locoplan.metrics import (
+    LIFT_TOL,
+    REST_SPEED,
     TaskGoal,
     expectation_results,
     goal_times,
@@ -42,6 +44,7 @@ if TYPE_CHECKING:
     from locoplan.render.video import VideoStats
 
 ON_FIXTURE_TOL = 0.03  # m: object bottom within this of a fixture's top counts as resting on it
+AT_TOL = 0.05  # m: a drop `at` a point is met within this distance
 
 
 @dataclass(frozen=True, slots=True)
@@ -146,6 +149,66 @@ def _object_state(
     return [round(float(x), 4) for x in pos], on, lifted
 
 
+def _on_fixture(scenario: Scenario, name: str, p: np.ndarray, fixture: str) -> bool:
+    """Whether the object's centre `p` is over the fixture's top with its bottom on it."""
+    spec = scenario.objects[name]
+    half_h = spec.size[0] if spec.shape == "sphere" else spec.size[2] / 2
+    f = scenario.fixtures[fixture]
+    c, s = math.cos(math.radians(f.yaw)), math.sin(math.radians(f.yaw))
+    dx, dy = p[0] - f.position[0], p[1] - f.position[1]
+    lx, ly = c * dx + s * dy, -s * dx + c * dy
+    inside = abs(lx) <= f.size[0] / 2 and abs(ly) <= f.size[1] / 2
+    return inside and abs(p[2] - half_h - f.size[2]) <= ON_FIXTURE_TOL
+
+
+def _object_goal_times(scenario: Scenario, plan: Plan, rec: RunRecord) -> dict[int, float | None]:
+    """When each manipulation task's goal was met, from the object's simulated trajectory:
+    pick -> lifted LIFT_TOL above where it was at the grasp; drop -> resting on its target
+    after the release (on a conveyor: riding the belt); throw -> landed after the release."""
+    t = np.asarray(rec.t)
+    out: dict[int, float | None] = {}
+    for k, task in enumerate(plan.tasks):
+        if task.action not in ("pick", "drop", "throw") or task.object is None:
+            continue
+        name = task.object
+        traj = np.asarray(rec.object_positions.get(name, []))
+        out[k] = None
+        if traj.size == 0:
+            continue
+        kind = "grasp" if task.action == "pick" else "release"
+        when = [
+            te
+            for te, ev, ob in rec.grasp_events
+            if ev == kind and ob == name and te >= task.start - 0.1
+        ]
+        if not when:
+            continue
+        t0 = when[0]
+        after = np.nonzero(t >= t0)[0]
+        if after.size == 0:
+            continue
+        i0 = int(after[0])
+        speed = np.zeros(len(t))
+        speed[1:] = np.linalg.norm(np.diff(traj, axis=0), axis=1) / np.maximum(np.diff(t), 1e-9)
+        for i in range(i0, len(t)):
+            p = traj[i]
+            if task.action == "pick":
+                ok = p[2] >= traj[i0, 2] + LIFT_TOL
+            elif task.action == "drop" and task.onto is not None:
+                belt = scenario.fixtures[task.onto].speed or 0.0
+                ok = (
+                    _on_fixture(scenario, name, p, task.onto) and speed[i] <= abs(belt) + REST_SPEED
+                )
+            elif task.action == "drop" and task.at is not None:
+                ok = np.linalg.norm(p - np.asarray(task.at)) <= AT_TOL and speed[i] <= REST_SPEED
+            else:
+                ok = speed[i] <= REST_SPEED and i > i0 + 5
+            if ok:
+                out[k] = float(t[i])
+                break
+    return out
+
+
 def compute_metrics(
     scenario: Scenario,
     plan: Plan,
@@ -161,9 +224,11 @@ def compute_metrics(
     objects: dict[str, dict[str, Any]] = {}
     for name in scenario.objects:
         if rec.object_positions[name]:
-            p, on, held = _object_state(scenario, rec, name)
-            objects[name] = {"position": p, "on": on, "held": held}
-    times = goal_times(t, pos[:, :2], yaw, goals, rec.fall_time, {})
+            p, on, _ = _object_state(scenario, rec, name)
+            objects[name] = {"position": p, "on": on, "held": name in rec.held_at_end}
+    times = goal_times(
+        t, pos[:, :2], yaw, goals, rec.fall_time, _object_goal_times(scenario, plan, rec)
+    )
     completed = bool(times) and all(x is not None for x in times) and not rec.fell
     completion = max(x for x in times if x is not None) if completed else None
     ratio, joint, peaks = torque_peaks(rec.peak_abs_torque, rec.torque_limits, rec.joint_names)
