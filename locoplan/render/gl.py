@@ -71,3 +71,11 @@ def open_gl_context(width: int, height: int) -> tuple[str, GLContext]:
             f"or try MUJOCO_GL={other} with {' '.join(packages_for(other))}",
         ) from exc
     return backend, context
+
+
+def check_gl() -> str:
+    """Open and free a tiny context to find out whether rendering works here; returns the
+    backend's name. RenderError (naming the packages to install) when it does not."""
+    backend, context = open_gl_context(16, 16)
+    context.free()
+    return backend
