@@ -147,6 +147,7 @@ def _yaml() -> YAML:
     yaml = YAML(typ="rt")
     yaml.preserve_quotes = True
     yaml.width = 4096  # never re-wrap long lines: line numbers stay those of the file
+    yaml.indent(mapping=2, sequence=4, offset=2)  # the `  - ` lists of the format's examples
     return yaml
 
 

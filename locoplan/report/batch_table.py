@@ -63,6 +63,8 @@ def batch_table(results: Sequence[BatchResult]) -> Table:
         m: Mapping[str, Any] = outcome.metrics or {}
         failed = outcome.status == "failed"
         problem = "\n".join(outcome.failures) if failed else outcome.message
+        # A bad file's message starts with its path, which the row already shows.
+        problem = problem.removeprefix(f"{result.case.case_id}:")
         if outcome.cached:
             wall = "cached"
         elif outcome.wall_time > 0:

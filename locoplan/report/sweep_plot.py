@@ -74,7 +74,15 @@ def plot_sweep(
         _line(ax, rows, keys, metric, y, fell, failed, missing)
     handles = _legend_handles(bool(fell.any()), bool(failed.any()), bool(missing.any()))
     if handles:
-        ax.legend(handles=handles, loc="best", fontsize=8)
+        # Below the axes: inside, it would hide a heat-map cell or a point of the line.
+        ax.legend(
+            handles=handles,
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.18),
+            ncol=len(handles),
+            fontsize=8,
+            frameon=False,
+        )
     ax.set_title(title or f"{metric} over {' x '.join(keys)}")
     fig.tight_layout()
     fig.savefig(path)
@@ -126,8 +134,7 @@ def _heat_map(
     col = [xs.index(r[keys[0]]) for r in rows]
     row = [ys.index(r[keys[1]]) for r in rows]
     grid[row, col] = y
-    cmap = matplotlib.colormaps["viridis"].copy()
-    cmap.set_bad("lightgrey")
+    cmap = matplotlib.colormaps["viridis"].with_extremes(bad="lightgrey")
     image = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto", cmap=cmap)
     fig.colorbar(image, ax=ax, label=metric)
     ax.set_xticks(range(len(xs)), [_label(v) for v in xs], rotation=45, ha="right")
