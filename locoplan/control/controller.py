@@ -175,6 +175,9 @@ class LocoManipulationController:
         self._last_mpc_t = -math.inf
         self._last_contact = (True, True)
         self._swing = [_SwingState(), _SwingState()]
+        # Planned touchdown points by (foot, touchdown time), refreshed at every MPC update
+        # (10 ms) and shared by the MPC's horizon and the swing trajectories.
+        self._footholds: dict[tuple[int, float], tuple[FloatArray, float]] = {}
         # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
         self._cols_leg = [np.arange(6, 11), np.arange(11, 16)]
         self._cols_arm = [np.arange(16, 19), np.arange(19, 22)]
@@ -262,17 +265,17 @@ class LocoManipulationController:
         contact = np.asarray(self.plan.contact_flags(times), dtype=bool)
         p_feet = np.zeros((N, 2, 3))
         foot_yaw = np.zeros((N, 2))
+        self._footholds.clear()
         for k in range(2):
-            cache: dict[float, tuple[FloatArray, float]] = {}
             for i in range(N):
                 t_td = self.plan.stance_start(k, float(times[i]))
                 if t_td is None or t_td <= t + 1e-9:
                     p_feet[i, k] = p_feet_now[k]
                     foot_yaw[i, k] = yaw_feet_now[k]
                 else:
-                    if t_td not in cache:
-                        cache[t_td] = self._foothold(k, t, t_td, p_c, v_c)
-                    p_feet[i, k], foot_yaw[i, k] = cache[t_td]
+                    if (k, t_td) not in self._footholds:
+                        self._footholds[(k, t_td)] = self._foothold(k, t, t_td, p_c, v_c)
+                    p_feet[i, k], foot_yaw[i, k] = self._footholds[(k, t_td)]
         obj_mass = self.carried_mass(times)
         held = obj_mass > 0.0
         p_obj = np.asarray(self.plan.object_positions(times, p_base_ref, yaw_ref), dtype=float)
@@ -404,7 +407,10 @@ class LocoManipulationController:
             if ph is None:
                 continue
             sw = self._swing[k]
-            p_td, yaw_td = self._foothold(k, t, ph.touchdown, p_c, v_c)
+            key = (k, ph.touchdown)
+            if key not in self._footholds:
+                self._footholds[key] = self._foothold(k, t, ph.touchdown, p_c, v_c)
+            p_td, yaw_td = self._footholds[key]
             duration = ph.touchdown - ph.liftoff
             phase = min(1.0, max(0.0, (t - ph.liftoff) / duration))
             pt = swing_point(sw.p_start, p_td, self.s.swing_height, phase, duration)
@@ -552,7 +558,7 @@ class LocoManipulationController:
         if rows_J:
             Jc = np.vstack(rows_J)
             tasks.append(AccelerationTask(Jc, np.concatenate(rows_b), np.zeros(Jc.shape[0])))
-        # 1-2: trunk orientation and position (base frame = root joint frame).
+        # 1: trunk position and orientation (base frame = root joint frame).
         ref = self.plan.trunk_reference_at(t)
         J_base = r.frame_jacobian(self.desc.trunk_body)
         dJv_base = r.frame_jdot_v(self.desc.trunk_body)
@@ -562,7 +568,6 @@ class LocoManipulationController:
         acc_rot = np.asarray(s.trunk_kp_rot) * e_rot + np.asarray(s.trunk_kd_rot) * (
             w_des - omega_w
         )
-        tasks.append(AccelerationTask(J_base[3:], dJv_base[3:], acc_rot))
         p_des = np.asarray(ref.position, dtype=float).copy()
         p_des[:2] += self._com_shift(np.array([t]))[0]
         v_des = np.asarray(ref.velocity, dtype=float)
@@ -570,8 +575,10 @@ class LocoManipulationController:
         acc_pos = np.asarray(s.trunk_kp_pos) * (p_des - q[:3]) + np.asarray(s.trunk_kd_pos) * (
             v_des - v_base
         )
-        tasks.append(AccelerationTask(J_base[:3], dJv_base[:3], acc_pos))
-        # 3: swing feet (position + pitch/yaw orientation) and hands.
+        # Orientation and position in one level: the base's 6 DoF are independent, so stacking
+        # them costs one 6x6 solve instead of two 3x3 ones and changes nothing.
+        tasks.append(AccelerationTask(J_base, dJv_base, np.concatenate([acc_pos, acc_rot])))
+        # 2: swing feet (position + pitch/yaw orientation) and hands.
         rows_J, rows_b, rows_a = [], [], []
         i_sw = 0
         for k in range(2):
