@@ -5,7 +5,9 @@ file as Foxglove would."""
 
 from __future__ import annotations
 
+import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -168,3 +170,43 @@ def test_mpc_prediction_torque_ratio_and_samples(run: tuple[Scene, Plan, RunLog]
     times = [t for t, _ in log.messages("/sim/qpos")]
     assert times[0] == 0.0 and len(times) == round(T_END / 0.01) + 1
     assert np.all(np.diff(times) > 0)
+
+
+def _layout_paths(node: Any) -> list[str]:
+    """Every message path ("value" of plot/state series, "topicPath") and 3D topic of a
+    Foxglove layout's panel configs."""
+    paths: list[str] = []
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if key in ("value", "topicPath") and isinstance(value, str):
+                paths.append(value)
+            elif key == "topics" and isinstance(value, dict):
+                paths += list(value)
+            else:
+                paths += _layout_paths(value)
+    elif isinstance(node, list):
+        for item in node:
+            paths += _layout_paths(item)
+    return paths
+
+
+def test_foxglove_layout_refers_to_what_the_log_holds(run: tuple[Scene, Plan, RunLog]) -> None:
+    scene, _, log = run
+    layout = json.loads((ROOT / "docs" / "foxglove-layout.json").read_text())
+    panels = {key.split("!")[0] for key in layout["configById"]}
+    assert {"3D", "Plot", "StateTransitions"} <= panels
+    ratio = next(iter(log.messages(TORQUE_RATIO)))[1]
+    sample = next(iter(log.messages("/sim/qpos")))[1]
+    paths = _layout_paths(layout["configById"])
+    assert paths
+    for path in paths:
+        topic = re.match(r"/[^.\[{]+", path)
+        assert topic is not None and topic.group(0) in log.topics, path
+        field = path[topic.end() :].lstrip(".")
+        if topic.group(0) == TORQUE_RATIO:
+            assert field in ratio, path
+        elif topic.group(0) == "/sim/qpos":
+            assert field.split("[")[0] in sample, path
+    # Every joint's torque ratio is plotted.
+    plotted = {p.split(".")[-1] for p in paths if p.startswith(TORQUE_RATIO)}
+    assert plotted == set(scene.robot.joint_names)
