@@ -32,8 +32,8 @@ import numpy.typing as npt
 from locoplan.control.contact import ContactLimits
 from locoplan.control.mpc import MpcInput, MpcSettings, MpcSolution, MultiContactMpc
 from locoplan.control.swing import min_jerk, swing_point
+from locoplan.control.tasks import TaskGains, build_tasks, rot_z, rotation_error
 from locoplan.control.wbc import (
-    AccelerationTask,
     StanceContact,
     WbcOutput,
     WbcSettings,
@@ -51,11 +51,6 @@ GRAVITY = 9.81
 LOAD_RAMP = 0.8  # s over which a lifted (or placed) object's weight comes on (goes off)
 LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
 FEET = ("L", "R")
-
-
-def rot_z(yaw: float) -> FloatArray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def wrap_angle(a: float) -> float:
@@ -78,17 +73,6 @@ def rpy_from_matrix(R: FloatArray) -> tuple[float, float, float]:
     pitch = -math.asin(max(-1.0, min(1.0, R[2, 0])))
     roll = math.atan2(R[2, 1], R[2, 2])
     return roll, pitch, yaw
-
-
-def rotation_error(R_des: FloatArray, R: FloatArray) -> FloatArray:
-    """World-frame rotation vector e with exp([e]x) R = R_des (log map of R_des R')."""
-    E = R_des @ R.T
-    cos_t = max(-1.0, min(1.0, (np.trace(E) - 1.0) / 2.0))
-    theta = math.acos(cos_t)
-    w = np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
-    if theta < 1e-6:
-        return 0.5 * w
-    return theta / (2.0 * math.sin(theta)) * w
 
 
 @dataclass(frozen=True, slots=True)
@@ -455,12 +439,29 @@ class LocoManipulationController:
                 tau_ext,
             )
         else:
-            tasks = self._tasks(
-                t,
+            ref = self.plan.trunk_reference_at(t)
+            tasks = build_tasks(
+                TaskGains(
+                    self.s.trunk_kp_pos,
+                    self.s.trunk_kd_pos,
+                    self.s.trunk_kp_rot,
+                    self.s.trunk_kd_rot,
+                    self.s.swing_kp_acc,
+                    self.s.swing_kd_acc,
+                    self.s.swing_kp_rot,
+                    self.s.swing_kd_rot,
+                ),
                 q,
                 v,
                 R,
                 omega_w,
+                np.asarray(ref.position, dtype=float)
+                + np.append(self._com_shift(np.array([t]))[0], 0.0),
+                np.asarray(ref.velocity, dtype=float),
+                float(ref.yaw),
+                float(ref.yaw_rate),
+                r.frame_jacobian(self.desc.trunk_body),
+                r.frame_jdot_v(self.desc.trunk_body),
                 stance,
                 J_feet,
                 dJv_feet,
@@ -468,7 +469,8 @@ class LocoManipulationController:
                 p_feet,
                 R_feet,
                 swing_acc,
-                J_hands,
+                [J[:3] for J in J_hands],
+                [r.frame_jdot_v(h)[:3] for h in self.desc.hand_frames],
                 hand_acc,
             )
             qdd_cmd = prioritized_acceleration(tasks, 22)
@@ -524,88 +526,6 @@ class LocoManipulationController:
         for k in hands:
             tau_ext += J_hands[k][:3].T @ f
         return tau_ext
-
-    def _tasks(
-        self,
-        t: float,
-        q: FloatArray,
-        v: FloatArray,
-        R: FloatArray,
-        omega_w: FloatArray,
-        stance: tuple[bool, ...],
-        J_feet: list[FloatArray],
-        dJv_feet: list[FloatArray],
-        v_feet: list[FloatArray],
-        p_feet: FloatArray,
-        R_feet: list[FloatArray],
-        swing: list[tuple[FloatArray, FloatArray, FloatArray, float]],
-        J_hands: list[FloatArray],
-        hand_acc: FloatArray,
-    ) -> list[AccelerationTask]:
-        r = self.robot
-        s = self.s
-        tasks: list[AccelerationTask] = []
-        # 0: stance contacts, 5 rows per foot (no constraint on roll about the foot's x axis).
-        rows_J, rows_b = [], []
-        for k in range(2):
-            if not stance[k]:
-                continue
-            Rf = R_feet[k]
-            Jang = Rf.T @ J_feet[k][3:]
-            aang = Rf.T @ dJv_feet[k][3:]
-            rows_J.append(np.vstack([J_feet[k][:3], Jang[1:]]))
-            rows_b.append(np.concatenate([dJv_feet[k][:3], aang[1:]]))
-        if rows_J:
-            Jc = np.vstack(rows_J)
-            tasks.append(AccelerationTask(Jc, np.concatenate(rows_b), np.zeros(Jc.shape[0])))
-        # 1: trunk position and orientation (base frame = root joint frame).
-        ref = self.plan.trunk_reference_at(t)
-        J_base = r.frame_jacobian(self.desc.trunk_body)
-        dJv_base = r.frame_jdot_v(self.desc.trunk_body)
-        R_des = rot_z(float(ref.yaw))
-        e_rot = rotation_error(R_des, R)
-        w_des = np.array([0.0, 0.0, float(ref.yaw_rate)])
-        acc_rot = np.asarray(s.trunk_kp_rot) * e_rot + np.asarray(s.trunk_kd_rot) * (
-            w_des - omega_w
-        )
-        p_des = np.asarray(ref.position, dtype=float).copy()
-        p_des[:2] += self._com_shift(np.array([t]))[0]
-        v_des = np.asarray(ref.velocity, dtype=float)
-        v_base = R @ v[:3]
-        acc_pos = np.asarray(s.trunk_kp_pos) * (p_des - q[:3]) + np.asarray(s.trunk_kd_pos) * (
-            v_des - v_base
-        )
-        # Orientation and position in one level: the base's 6 DoF are independent, so stacking
-        # them costs one 6x6 solve instead of two 3x3 ones and changes nothing.
-        tasks.append(AccelerationTask(J_base, dJv_base, np.concatenate([acc_pos, acc_rot])))
-        # 2: swing feet (position + pitch/yaw orientation) and hands.
-        rows_J, rows_b, rows_a = [], [], []
-        i_sw = 0
-        for k in range(2):
-            if stance[k] or i_sw >= len(swing):
-                continue
-            p_d, v_d, a_d, yaw_d = swing[i_sw]
-            i_sw += 1
-            a_lin = (
-                a_d + s.swing_kp_acc * (p_d - p_feet[k]) + s.swing_kd_acc * (v_d - v_feet[k][:3])
-            )
-            Rf = R_feet[k]
-            e = Rf.T @ rotation_error(rot_z(yaw_d), Rf)
-            w_loc = Rf.T @ v_feet[k][3:]
-            a_ang = s.swing_kp_rot * e - s.swing_kd_rot * w_loc
-            Jang = Rf.T @ J_feet[k][3:]
-            aang = Rf.T @ dJv_feet[k][3:]
-            rows_J.append(np.vstack([J_feet[k][:3], Jang[1:]]))
-            rows_b.append(np.concatenate([dJv_feet[k][:3], aang[1:]]))
-            rows_a.append(np.concatenate([a_lin, a_ang[1:]]))
-        for k in range(2):
-            rows_J.append(J_hands[k][:3])
-            rows_b.append(r.frame_jdot_v(self.desc.hand_frames[k])[:3])
-            rows_a.append(hand_acc[k])
-        tasks.append(
-            AccelerationTask(np.vstack(rows_J), np.concatenate(rows_b), np.concatenate(rows_a))
-        )
-        return tasks
 
     def _jacobian_mapping(
         self,
