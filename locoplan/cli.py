@@ -907,7 +907,8 @@ def compare_command(
         out.print(compare_table(comparison))
         if comparison.schedule_note:
             out.print(comparison.schedule_note, markup=False)
-        written = ["compare.json", *(p.path.name for p in plots)]
+        logs = [o.log_path.name for o in comparison.outcomes if o.log_path is not None]
+        written = ["compare.json", *logs, *(p.path.name for p in plots)]
         out.print(f"wrote {', '.join(written)} to {directory}", markup=False)
     for o in comparison.outcomes:
         if o.broke:

@@ -328,12 +328,13 @@ def paths_figure(
                 zorder=0,
             )
         )
+        corners = f.corners()
         ax.text(
-            f.center_xy[0],
-            f.center_xy[1],
-            f"{f.name}\n(top {f.top:.2f} m)",
+            float(np.mean(corners[:4, 0])),
+            float(np.max(corners[:, 1])) - 0.02,
+            f"{f.name} (top {f.top:.2f} m)",
             ha="center",
-            va="center",
+            va="top",
             fontsize=8,
             color="0.3",
         )

@@ -58,17 +58,18 @@ def _diff(v: float | None, fmt: str, unit: str = "") -> str:
 
 
 def compare_table(comparison: Comparison) -> Table:
-    """The comparison as a table: completion time, yaw difference, peak torque ratio and the
-    joint that hit it, fell, placed, MPC solve p99, real-time factor, passed; a run that broke
-    shows its error instead."""
+    """The comparison as a table: completed, completion time, yaw difference, peak torque
+    ratio and the joint that hit it, fell, placed, MPC update p99, real-time factor and the
+    expectations (a run that broke shows its error there). Log paths are not in the table
+    (they are in compare.json)."""
     base_label, prop_label = baseline_and_proposed(comparison.kind)
     labels = comparison.labels
     title = f"{comparison.scenario_name}: {' vs '.join(labels)}"
-    t = Table(title=title)
+    t = Table(title=title, caption=f"Δ = {prop_label} − {base_label}")
     t.add_column("metric", style="bold")
     for label in labels:
         t.add_column(label, justify="right")
-    t.add_column(f"{prop_label} − {base_label}", justify="right")
+    t.add_column("Δ", justify="right")
     ms = [o.metrics or {} for o in comparison.outcomes]
     d = comparison.differences()
 
@@ -127,8 +128,6 @@ def compare_table(comparison: Comparison) -> Table:
         "expectations",
         [_expectations(o.metrics, o.error) for o in comparison.outcomes],
     )
-    logs = [str(o.log_path) if o.log_path is not None else "-" for o in comparison.outcomes]
-    row("log", logs)
     return t
 
 

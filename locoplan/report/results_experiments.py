@@ -448,6 +448,32 @@ def _checks_throw(o: VariantOutcome, trace: RunTrace | None, scenario: Scenario)
     ]
 
 
+def _checks_generic(outcomes: Sequence[VariantOutcome]) -> list[Check]:
+    return [c for o in outcomes for c in (_no_fall(o), _torque(o, "not shown"))]
+
+
+def experiment_checks(
+    key: str,
+    outcomes: Sequence[VariantOutcome],
+    comparison: Comparison | None,
+    scenario: Scenario,
+) -> list[Check]:
+    """The paper-vs-ours checks of the experiment `key` (one of EXPERIMENTS' keys); another
+    key gets the generic ones (stays up, torques within limits) for every run."""
+    one = outcomes[0] if len(outcomes) == 1 else None
+    if key == "package-transfer" and comparison is not None:
+        return _checks_package_transfer(comparison, scenario)
+    if key == "model-comparison" and comparison is not None:
+        return _checks_model_comparison(comparison)
+    if key == "standing-load" and one is not None:
+        return _checks_standing_load(one, one.trace)
+    if key == "pick-walk-drop" and one is not None:
+        return _checks_pick_walk_drop(one, one.trace)
+    if key == "throw" and one is not None:
+        return _checks_throw(one, one.trace, scenario)
+    return _checks_generic(outcomes)
+
+
 # --- running --------------------------------------------------------------------------------
 
 
@@ -489,21 +515,10 @@ def _run(
             scenario, text, out_runs, kind=exp.run, jobs=jobs, progress=progress
         )
         outcomes: tuple[VariantOutcome, ...] = comparison.outcomes
-        checks = (
-            _checks_package_transfer(comparison, scenario)
-            if exp.run == "strategies"
-            else _checks_model_comparison(comparison)
-        )
     else:
         variant = Variant(scenario.strategy, scenario.strategy, scenario.model, scenario.name)
         outcomes = run_variants(scenario, text, [variant], out_runs, jobs=1, progress=progress)
-        o, tr = outcomes[0], outcomes[0].trace
-        if exp.key == "standing-load":
-            checks = _checks_standing_load(o, tr)
-        elif exp.key == "pick-walk-drop":
-            checks = _checks_pick_walk_drop(o, tr)
-        else:
-            checks = _checks_throw(o, tr, scenario)
+    checks = experiment_checks(exp.key, outcomes, comparison, scenario)
     traces: Sequence[RunTrace] = [o.trace for o in outcomes if o.trace is not None]
     titles = comparison_titles(scenario.name, [o.label for o in outcomes])
     plots = plot_traces(
