@@ -440,7 +440,6 @@ class _LiveProgress:
     def __init__(self, total: int, label: str) -> None:
         from rich.progress import (
             BarColumn,
-            MofNCompleteColumn,
             Progress,
             TaskID,
             TextColumn,
@@ -454,14 +453,13 @@ class _LiveProgress:
         self.bar = Progress(
             TextColumn("[bold]{task.description}", table_column=None),
             BarColumn(),
-            MofNCompleteColumn(),
             TextColumn("{task.fields[note]}"),
             TimeElapsedColumn(),
             console=out,
             disable=not self.live,
             transient=True,
         )
-        self.overall = self.bar.add_task(label, total=total, note="")
+        self.overall = self.bar.add_task(label, total=total, note=f"0/{total}")
 
     def __enter__(self) -> _LiveProgress:
         self.bar.__enter__()
@@ -494,7 +492,7 @@ class _LiveProgress:
         task = self.tasks.pop(outcome.job_id, None)
         if task is not None:
             self.bar.remove_task(task)
-        self.bar.update(self.overall, completed=self.done)
+        self.bar.update(self.overall, completed=self.done, note=f"{self.done}/{self.total}")
         how = "cached" if outcome.cached else f"{outcome.wall_time:.1f} s"
         line = f"[{self.done}/{self.total}] {outcome.status:<7} {outcome.job_id} ({how})"
         if outcome.status != "passed" and outcome.message:
