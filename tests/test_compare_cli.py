@@ -4,8 +4,10 @@ the plots, and what it says when both strategies schedule the same (cli-contract
 from __future__ import annotations
 
 import json
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -99,3 +101,28 @@ def test_help_names_outputs_and_exit_codes() -> None:
     assert res.returncode == 0
     for word in ("--models", "--jobs", "--strategy", "compare.json", "yaw.png", "Exit status"):
         assert word in res.stdout
+
+
+@pytest.mark.closed_loop
+def test_ctrl_c_stops_both_runs_and_closes_their_logs(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    script = Path(__file__).resolve().parent.parent / "scenarios" / "walk-square.yaml"
+    proc = subprocess.Popen(
+        [*LOCOPLAN, "compare", str(script), "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    logs = [out / f"walk-square-{label}.mcap" for label in ("quasi-static", "dynamic")]
+    deadline = time.monotonic() + 90
+    # Both workers are past their first messages (the log header alone is a few kB).
+    while not all(p.exists() and p.stat().st_size > 20_000 for p in logs):
+        assert time.monotonic() < deadline, "the runs never started writing their logs"
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "interrupted" in stderr and "Traceback" not in stderr
+    for p in logs:
+        assert read_log(p).complete, p
+    assert not (out / "compare.json").exists()

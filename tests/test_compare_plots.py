@@ -4,8 +4,10 @@ follow the plan keep these tests free of simulation."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 from compare_fixtures import repo_scenario_text, synthetic_comparison, synthetic_trace
 from matplotlib.figure import Figure
@@ -22,6 +24,7 @@ from locoplan.report.compare_plots import (
     plot_traces,
     png_size,
     torque_figure,
+    trunk_shift,
     yaw_figure,
 )
 from locoplan.scenario import Scenario
@@ -155,3 +158,20 @@ def test_png_size_rejects_other_files(tmp_path: Path) -> None:
     p.write_bytes(b"GIF89a" + bytes(30))
     with pytest.raises(ValueError, match="not a PNG"):
         png_size(p)
+
+
+def test_trunk_shift_is_along_the_start_heading(package_traces: PackageTraces) -> None:
+    _, traces = package_traces
+    tr = traces[0]
+    n = tr.t.size
+    # Facing +y (yaw 90 deg) and moving 5 cm towards -y is 5 cm back; sideways motion is not
+    # counted. Exact up to float rounding of cos(pi/2).
+    rpy = np.zeros((n, 3))
+    rpy[:, 2] = np.pi / 2
+    pos = np.zeros((n, 3))
+    pos[:, 1] = np.linspace(0.0, -0.05, n)
+    pos[:, 0] = np.linspace(0.0, 0.30, n)
+    shift = trunk_shift(replace(tr, base_rpy=rpy, base_position=pos))
+    assert shift[0] == 0.0
+    assert shift[-1] == pytest.approx(-0.05, abs=1e-12)
+    assert len(pitch_figure(traces).axes) == 3

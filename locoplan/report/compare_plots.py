@@ -373,7 +373,7 @@ def paths_figure(
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     ax.set_title(
-        "top view (rays: heading at pick start ··· and drop start -·-; □ object at the end)",
+        "top view (rays: heading at pick start ··· and drop/throw start -·-; □ object at the end)",
         fontsize=10,
     )
     for f in fixtures:
@@ -392,17 +392,28 @@ def paths_figure(
 # --- pitch ----------------------------------------------------------------------------------
 
 
+def trunk_shift(tr: RunTrace) -> FloatArray:
+    """Trunk origin displacement (n,) m along the run's initial heading from its initial
+    position (negative: the pelvis moved back, as when leaning back against a load)."""
+    if not tr.t.size:
+        return np.zeros(0)
+    heading = np.array([math.cos(tr.yaw[0]), math.sin(tr.yaw[0])])
+    return np.asarray((tr.base_position[:, :2] - tr.base_position[0, :2]) @ heading)
+
+
 def pitch_figure(traces: Sequence[RunTrace], title: str | None = None) -> Figure:
     """Top: trunk pitch (deg, positive = leaning forward) over time, one line per run
-    (labelled with the run's label), with the object-held interval shaded. Bottom: trunk
-    height (m), where a fall shows as a drop."""
-    fig = _new_figure(10.0, 5.6)
-    ax, ax_z = fig.subplots(2, 1, sharex=True, height_ratios=(1.6, 1.0))
+    (labelled with the run's label), with the planned object-held intervals as bars. Middle:
+    trunk shift along the initial heading (cm, negative = back). Bottom: trunk height (m),
+    where a fall shows as a drop."""
+    fig = _new_figure(10.0, 7.0)
+    ax, ax_x, ax_z = fig.subplots(3, 1, sharex=True, height_ratios=(1.5, 1.0, 1.0))
     for k, tr in enumerate(traces):
         c = color_of(tr.label, k)
         if not tr.t.size:
             continue
         ax.plot(tr.t, np.degrees(tr.base_rpy[:, 1]), color=c, lw=1.8, label=tr.label)
+        ax_x.plot(tr.t, 100.0 * trunk_shift(tr), color=c, lw=1.5, label=tr.label)
         ax_z.plot(tr.t, tr.base_position[:, 2], color=c, lw=1.5, label=tr.label)
         # Held intervals as thin bars along the top edge (x in s, y in axes fraction).
         ax.broken_barh(
@@ -424,11 +435,14 @@ def pitch_figure(traces: Sequence[RunTrace], title: str | None = None) -> Figure
         title="bars at the top: object held (plan)",
         title_fontsize=8,
     )
+    ax_x.axhline(0.0, color="0.4", lw=0.8)
+    ax_x.set_ylabel("trunk shift along\nstart heading (cm)")
+    ax_x.grid(alpha=0.3)
     ax_z.set_ylabel("trunk height (m)")
     ax_z.set_xlabel("time (s)")
     ax_z.grid(alpha=0.3)
     ax_z.set_xlim(0.0, _t_max(traces))
-    fig.suptitle(title or "Trunk lean and height")
+    fig.suptitle(title or "Trunk lean, shift and height")
     return fig
 
 
@@ -506,7 +520,7 @@ def comparison_titles(scenario_name: str, labels: Sequence[str]) -> dict[str, st
         "contacts": f"{scenario_name}: contact timeline, {vs}",
         "torque": f"{scenario_name}: left leg joint torques against their limits, {vs}",
         "paths": f"{scenario_name}: trunk and object paths, {vs}",
-        "pitch": f"{scenario_name}: trunk lean and height, {vs}",
+        "pitch": f"{scenario_name}: trunk lean, shift and height, {vs}",
     }
 
 

@@ -27,6 +27,14 @@ def _yes_no(v: Any) -> str:
     return "yes" if v else "no"
 
 
+def object_whereabouts(o: Mapping[str, Any]) -> str:
+    """Where a metrics `objects` entry ended: "in the hands", "on <fixture>" or "on no
+    fixture" (the grasp wins: a held object hovering over its table is not on it)."""
+    if o.get("held"):
+        return "in the hands"
+    return f"on {o.get('on')}" if o.get("on") else "on no fixture"
+
+
 def _placed(m: Mapping[str, Any]) -> str:
     """Where each object ended: "package on conveyor", or "none" without objects."""
     objects = m.get("objects") or {}
@@ -34,8 +42,7 @@ def _placed(m: Mapping[str, Any]) -> str:
         return "no objects"
     parts = []
     for name, o in objects.items():
-        where = o.get("on") or ("held" if o.get("held") else "floor/none")
-        parts.append(f"{name} on {where}")
+        parts.append(f"{name} {object_whereabouts(o)}")
     return ", ".join(parts)
 
 

@@ -18,6 +18,7 @@ from typing import Any
 
 from locoplan import __version__
 from locoplan.compare import VariantOutcome
+from locoplan.report.compare_table import object_whereabouts
 from locoplan.report.results_experiments import (
     EXPERIMENTS,
     Experiment,
@@ -81,8 +82,7 @@ def _metrics_table(outcomes: Sequence[VariantOutcome]) -> list[str]:
             continue
         m = o.metrics
         objects = ", ".join(
-            f"{name} on {v.get('on') or ('hands' if v.get('held') else 'none')}"
-            for name, v in (m.get("objects") or {}).items()
+            f"{name} {object_whereabouts(v)}" for name, v in (m.get("objects") or {}).items()
         )
         failed = [k for k, e in (m.get("expectations") or {}).items() if not e["ok"]]
         fell = _num(m.get("fell"), "")

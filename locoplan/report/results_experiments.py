@@ -26,7 +26,8 @@ from locoplan.compare import (
     run_variants,
 )
 from locoplan.plan import compile_plan
-from locoplan.report.compare_plots import PlotFile, comparison_titles, plot_traces
+from locoplan.report.compare_plots import PlotFile, comparison_titles, plot_traces, trunk_shift
+from locoplan.report.compare_table import object_whereabouts
 from locoplan.scenario import Scenario, load_scenario_file
 
 RunKind = Literal["strategies", "models", "single"]
@@ -228,9 +229,25 @@ def held_pitch_deg(trace: RunTrace | None) -> float | None:
     return float(np.degrees(np.mean(trace.base_rpy[held, 1])))
 
 
+def held_shift_cm(trace: RunTrace | None) -> float | None:
+    """Mean trunk shift along the initial heading (cm, negative = back) over the samples where
+    the plan holds an object, or None."""
+    if trace is None or not trace.t.size:
+        return None
+    held = np.interp(trace.t, trace.t_plan, trace.object_held.astype(float)) > 0.5
+    if not held.any():
+        return None
+    return float(100.0 * np.mean(trunk_shift(trace)[held]))
+
+
 def _on(o: VariantOutcome | None, obj: str) -> str | None:
     objects = _m(o, "objects") or {}
     return (objects.get(obj) or {}).get("on")
+
+
+def _where(o: VariantOutcome | None, obj: str) -> str:
+    entry = (_m(o, "objects") or {}).get(obj)
+    return "n/a" if entry is None else object_whereabouts(entry)
 
 
 def _held_at_end(o: VariantOutcome | None, obj: str) -> bool | None:
@@ -326,12 +343,12 @@ def _checks_package_transfer(c: Comparison, scenario: Scenario) -> list[Check]:
             )
         )
     for o in (qs, dyn):
-        on = _on(o, "package")
+        on = _on(o, "package") if not _held_at_end(o, "package") else None
         out.append(
             Check(
                 f"package on the conveyor ({o.label})",
                 "yes",
-                _ran(o) or f"on {on}",
+                _ran(o) or _where(o, "package"),
                 on == "conveyor",
             )
         )
@@ -352,6 +369,12 @@ def _checks_standing_load(o: VariantOutcome, trace: RunTrace | None) -> list[Che
             _fmt(lean, "+.1f", "°"),
             None,
         ),
+        Check(
+            "trunk shift while holding (mean, along the start heading)",
+            "not stated for 14 kg",
+            _fmt(held_shift_cm(trace), "+.1f", " cm"),
+            None,
+        ),
     ]
 
 
@@ -367,6 +390,13 @@ def _checks_model_comparison(c: Comparison) -> list[Check]:
             "leans back",
             _fmt(lean_ext, "+.1f", "°"),
             None if lean_ext is None else lean_ext < 0.0,
+        ),
+        Check(
+            "trunk shift while holding (mean, along the start heading)",
+            "Model 2 moves back, Model 1 forward (snapshots)",
+            f"external-force {_fmt(held_shift_cm(ext.trace), '+.1f', ' cm')}, "
+            f"combined {_fmt(held_shift_cm(comb.trace), '+.1f', ' cm')}",
+            None,
         ),
         Check(
             "Model 2 holds the block to the end",
@@ -394,13 +424,13 @@ def _carried_distance(trace: RunTrace | None, obj: str) -> float | None:
 
 
 def _checks_pick_walk_drop(o: VariantOutcome, trace: RunTrace | None) -> list[Check]:
-    on = _on(o, "box")
+    on = _on(o, "box") if not _held_at_end(o, "box") else None
     dist = _carried_distance(trace, "box")
     return [
         Check(
             "box placed on the platform",
             "yes (orange target)",
-            _ran(o) or f"on {on}",
+            _ran(o) or _where(o, "box"),
             on == "platform",
         ),
         Check(
