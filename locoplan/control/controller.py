@@ -85,7 +85,11 @@ class ControllerSettings:
     mapping: Literal["wbc", "jacobian"] = "wbc"
     model: Literal["external-force", "combined"] = "external-force"
     qp_backend: str = "proxsuite"
-    mpc: MpcSettings = field(default_factory=MpcSettings)
+    # The MPC must respect the line foot's small yaw friction like the WBC does: planning
+    # turns on foot yaw moments (16 N m seen with a 4 kg box) spun the stance feet in place.
+    mpc: MpcSettings = field(
+        default_factory=lambda: MpcSettings(mu_torsion=ContactLimits().mu_torsion)
+    )
     limits: ContactLimits = field(default_factory=ContactLimits)
     trunk_kp_pos: tuple[float, float, float] = (200.0, 200.0, 500.0)
     trunk_kd_pos: tuple[float, float, float] = (20.0, 20.0, 30.0)

@@ -280,6 +280,7 @@ def controller_settings(scenario: Scenario, options: RunOptions) -> ControllerSe
         horizon=scenario.mpc.horizon,
         f_min=limits.f_min,
         f_max=limits.f_max,
+        mu_torsion=limits.mu_torsion,
         backend=options.qp_backend,
     )
     model = options.model or scenario.model
