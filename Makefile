@@ -27,8 +27,10 @@ system-packages:
 	  echo "warning: could not install $(GL_PACKAGES); video rendering will not work" >&2; \
 	fi
 
+# Exit status 1 means the run finished and an expectation failed (the table says which):
+# the demo still succeeded in running, so make does not treat it as an error.
 run: install
-	$(BIN)/locoplan run scenarios/package-transfer.yaml
+	$(BIN)/locoplan run scenarios/package-transfer.yaml || [ $$? -eq 1 ]
 
 lint: install
 	$(BIN)/ruff check locoplan tests benchmarks
