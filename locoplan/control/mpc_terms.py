@@ -122,7 +122,7 @@ class StepTerms:
     object is held), ``Tw`` (N, 2, 3, 5) the torque of a unit foot-frame wrench,
     ``cos_foot``/``sin_foot`` (N, 2) of the foot yaws, ``Phi`` (N, 6, 10) the omega/pdot kicks
     of the 10 wrench components of step k (zero columns for swing feet), ``cols`` the stance
-    variable indices into the 10N layout.
+    variable indices into the 10N layout, in the QP's order: steps 1..N-1, then step 0.
     """
 
     Iinv: FloatArray
@@ -203,6 +203,10 @@ def step_terms(inp: MpcInput, dt: float, Iinv_model2: FloatArray, Ib: FloatArray
     Phi4 *= inp.contact[:, None, :, None]
     Phi = Phi4.reshape(N, 6, 10)
     cols = np.flatnonzero(np.repeat(inp.contact.reshape(-1), 5))
+    # Step 0's variables last: only they depend on the measured state (through the lever
+    # arms from x0's CoM), so the leading block of H repeats while the plan does.
+    n0 = int(np.count_nonzero(cols < 10))
+    cols = np.concatenate([cols[n0:], cols[:n0]])
     return StepTerms(
         Iinv=Iinv,
         mass=mass,

@@ -372,11 +372,17 @@ class QpSolver:
         self._key = None
         self._has_result = False
 
-    def solve(self, problem: QpProblem, active_hint: npt.ArrayLike | None = None) -> QpSolution:
+    def solve(
+        self,
+        problem: QpProblem,
+        active_hint: npt.ArrayLike | None = None,
+        cholesky: FloatArray | None = None,
+    ) -> QpSolution:
         """Solve ``problem``; never raises on solver failure (check ``ok``/``status``).
 
-        ``active_hint``: guessed active constraint ids for the active-set path (see
-        `qp_active_set.constraint_ids`; `active_constraint_ids` of a previous solution).
+        For the active-set path only: ``active_hint`` guessed active constraint ids (see
+        `qp_active_set.constraint_ids`; `active_constraint_ids` of a previous solution),
+        ``cholesky`` the lower Cholesky factor of H if the caller already has it.
         """
         s = self.settings
         t0 = time.perf_counter()
@@ -395,6 +401,7 @@ class QpSolver:
                 s.eps_abs,
                 s.active_set_iter,
                 initial_active=active_hint,
+                cholesky=cholesky,
             )
             if r.status in ("solved", "infeasible"):
                 # "infeasible" is a certificate: the violated constraint's normal is a
