@@ -225,7 +225,13 @@ def compute_metrics(
     for name in scenario.objects:
         if rec.object_positions[name]:
             p, on, _ = _object_state(scenario, rec, name)
-            objects[name] = {"position": p, "on": on, "held": name in rec.held_at_end}
+            # Held: in the hands' grasp and not resting on anything (a grasp that never lifted
+            # the object off its table does not count).
+            objects[name] = {
+                "position": p,
+                "on": on,
+                "held": name in rec.held_at_end and on is None,
+            }
     times = goal_times(
         t, pos[:, :2], yaw, goals, rec.fall_time, _object_goal_times(scenario, plan, rec)
     )
