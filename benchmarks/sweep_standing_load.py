@@ -5,10 +5,12 @@ Run: OMP_NUM_THREADS=1 .venv/bin/python benchmarks/sweep_standing_load.py [--mas
 
 The same as `locoplan sweep scenarios/standing-load.yaml --set objects.block.mass=0:16:1`,
 plus a verdict per mass read from each point's metrics JSON: a mass is *held* when the robot
-did not fall, the peak torque stayed within the limits (ratio <= 1) and the block is still
-lifted at the end (`objects.block.held`: off the table, not resting on a fixture) after the
-5 s stand. Prints the table and the largest mass held, to compare with the paper's 14 kg
-(82 % of the robot's mass). Mass 0 is not a valid script (masses must be positive): it shows
+did not fall, every task goal was met (`completed`: the pick lifted the block), the block is
+off the table at the end (`objects.block.on` is null) after the 5 s stand, and the torques
+stayed within the limits without the last-guard clip ever acting (`torque_clips` 0; a clipped
+torque makes the peak ratio read exactly 1.00, so `peak_torque_ratio <= 1` alone cannot tell).
+Prints the table and the largest mass held, to compare with the paper's 14 kg (82 % of the
+robot's mass). Mass 0 is not a valid script (masses must be positive): it shows
 up as an invalid point. Takes about (17 points x 8 s simulated) / (real-time factor x jobs).
 """
 
@@ -62,16 +64,24 @@ def main() -> None:
         block = metrics.get("objects", {}).get("block", {})
         fell = bool(metrics.get("fell"))
         ratio = metrics.get("peak_torque_ratio")
-        held = bool(block.get("held")) and not fell and ratio is not None and ratio <= 1.0
+        clips = int(metrics.get("torque_clips", 0))
+        lifted = bool(metrics.get("completed")) and block.get("on") is None
+        within = ratio is not None and ratio <= 1.0 and clips == 0
+        held = lifted and within and not fell
         if held:
             held_masses.append(float(mass))
         fall_t = metrics.get("fall_time")
+        notes = [] if lifted else [f"block not lifted (on {block.get('on')})"]
+        if clips:
+            notes.append(f"{clips} torque clips, {metrics.get('wbc_failures', 0)} WBC failures")
+        if row["error"]:
+            notes.append(str(row["error"]))
         print(
             f"{mass:>8} {('yes' if fell else 'no'):>5} "
             f"{(f'{fall_t:.2f}' if fall_t is not None else '-'):>7} "
-            f"{(f'{ratio:.2f}' if ratio is not None else '-'):>7} "
+            f"{(f'{ratio:.3f}' if ratio is not None else '-'):>7} "
             f"{metrics.get('peak_torque_joint', '-')!s:>16} {('yes' if held else 'no'):>5}  "
-            f"{row['error'] or ''}"
+            f"{'; '.join(notes)}"
         )
     print(f"wall time {elapsed:.0f} s on {args.jobs} {args.backend} workers")
     print(f"CSV and plot in {args.out}")

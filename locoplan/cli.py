@@ -661,7 +661,7 @@ def sweep_command(
     yaw_difference_deg, passed, real_time_factor, error. The CSV is the
     same on either backend, but for real_time_factor (a wall-time figure).
     Writes DIR/<name>-sweep.png: --metric over one key, or a heat map over
-    two, with falls and failed expectations marked.
+    two, with falls, failed expectations and unfinished tasks marked.
 
     Exit status: 0 every point passed, 1 some point failed, errored or was
     invalid, 2 a bad command line (bad --set, list index out of range, no

@@ -25,6 +25,7 @@ def test_one_key_line_with_marked_points(tmp_path: Path) -> None:
     rows = [
         _row(m=0, peak_torque_ratio=0.4),
         _row(m=4, peak_torque_ratio=0.9, passed=False),
+        _row(m=6, peak_torque_ratio=1.0, completed=False),
         _row(m=8, peak_torque_ratio=1.3, fell=True, passed=False),
         _row(m=12, peak_torque_ratio=None, fell=None, passed=None),
     ]

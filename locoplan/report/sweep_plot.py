@@ -3,7 +3,9 @@
 One key: the metric as a line over the key's values. Two keys: a heat map over the grid (first
 key across, second key up). More keys: the metric over the point index, labelled. Points where
 the robot fell are marked with a red x, points whose expectations failed (without a fall) with
-an orange circle; points without metrics (invalid, broken run) are grey. For
+an orange circle, points where some task's goal was never met (without a fall; a pick that
+did not lift its object) with a purple triangle; points without metrics (invalid, broken run)
+are grey. For
 `peak_torque_ratio` the torque limit (ratio 1) is drawn.
 """
 
@@ -32,7 +34,9 @@ def _label(value: Any) -> str:
     return str(value)
 
 
-def _legend_handles(any_fell: bool, any_failed: bool, any_missing: bool) -> list[Line2D]:
+def _legend_handles(
+    any_fell: bool, any_failed: bool, any_incomplete: bool, any_missing: bool
+) -> list[Line2D]:
     handles = []
     if any_fell:
         handles.append(
@@ -42,6 +46,11 @@ def _legend_handles(any_fell: bool, any_failed: bool, any_missing: bool) -> list
         handles.append(
             Line2D([], [], color="darkorange", marker="o", markerfacecolor="none",
                    linestyle="", markersize=10, label="expectation failed")
+        )  # fmt: skip
+    if any_incomplete:
+        handles.append(
+            Line2D([], [], color="purple", marker="v", linestyle="", markersize=7,
+                   label="task not completed")
         )  # fmt: skip
     if any_missing:
         handles.append(
@@ -64,15 +73,18 @@ def plot_sweep(
     y = np.array([_as_float(r.get(metric)) for r in rows])
     fell = np.array([bool(r.get("fell")) for r in rows])
     failed = np.array([r.get("passed") is False and not r.get("fell") for r in rows])
+    incomplete = np.array([r.get("completed") is False and not r.get("fell") for r in rows])
     missing = np.array([r.get(metric) is None for r in rows])
     fig = Figure(figsize=(8, 5), dpi=110)
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     if len(keys) == 2:
-        _heat_map(fig, ax, rows, keys, metric, y, fell, failed)
+        _heat_map(fig, ax, rows, keys, metric, y, fell, failed, incomplete)
     else:
-        _line(ax, rows, keys, metric, y, fell, failed, missing)
-    handles = _legend_handles(bool(fell.any()), bool(failed.any()), bool(missing.any()))
+        _line(ax, rows, keys, metric, y, fell, failed, incomplete, missing)
+    handles = _legend_handles(
+        bool(fell.any()), bool(failed.any()), bool(incomplete.any()), bool(missing.any())
+    )
     if handles:
         # Below the axes: inside, it would hide a heat-map cell or a point of the line.
         ax.legend(
@@ -96,6 +108,7 @@ def _line(
     y: np.ndarray,
     fell: np.ndarray,
     failed: np.ndarray,
+    incomplete: np.ndarray,
     missing: np.ndarray,
 ) -> None:
     if len(keys) == 1 and all(isinstance(r[keys[0]], int | float) for r in rows):
@@ -109,6 +122,7 @@ def _line(
     ax.plot(x, y, "-o", color="tab:blue", markersize=4)
     ax.plot(x[fell], y[fell], "x", color="red", markersize=9, mew=2)
     ax.plot(x[failed], y[failed], "o", color="darkorange", markersize=10, mfc="none", mew=1.5)
+    ax.plot(x[incomplete], y[incomplete], "v", color="purple", markersize=7)
     if missing.any():
         for xm in x[missing]:
             ax.axvline(xm, color="grey", alpha=0.4, linewidth=3)
@@ -127,6 +141,7 @@ def _heat_map(
     y: np.ndarray,
     fell: np.ndarray,
     failed: np.ndarray,
+    incomplete: np.ndarray,
 ) -> None:
     xs = list(dict.fromkeys(r[keys[0]] for r in rows))
     ys = list(dict.fromkeys(r[keys[1]] for r in rows))
@@ -144,3 +159,4 @@ def _heat_map(
     c, r = np.array(col), np.array(row)
     ax.plot(c[fell], r[fell], "x", color="red", markersize=10, mew=2)
     ax.plot(c[failed], r[failed], "o", color="darkorange", markersize=12, mfc="none", mew=1.5)
+    ax.plot(c[incomplete], r[incomplete], "v", color="purple", markersize=8)
