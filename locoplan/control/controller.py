@@ -239,6 +239,7 @@ class LocoManipulationController:
         v_c: FloatArray,
         p_feet_now: FloatArray,
         yaw_feet_now: FloatArray,
+        p_hands_mid: FloatArray,
     ) -> MpcSolution:
         N = self.s.mpc.horizon
         dt = self.s.mpc.dt
@@ -267,6 +268,18 @@ class LocoManipulationController:
         obj_mass = self.carried_mass(times)
         held = obj_mass > 0.0
         p_obj = np.asarray(self.plan.object_positions(times, p_base_ref, yaw_ref), dtype=float)
+        if self.carried_mass(np.array([t]))[0] > 0.0:
+            # Feedback on where the load really is: the object sits between the hands, which
+            # lag their planned path (most when the robot turns with a load); shift the
+            # planned object path by today's error.
+            ref0 = self.plan.trunk_reference_at(t)
+            planned_now = np.asarray(
+                self.plan.object_positions(
+                    np.array([t]), np.asarray(ref0.position)[None, :], np.array([ref0.yaw])
+                ),
+                dtype=float,
+            )[0]
+            p_obj = p_obj + (p_hands_mid - planned_now)
         x_ref[:, 3:5] += self._com_shift(times)
         inp = MpcInput(
             x0=x0,
@@ -369,7 +382,11 @@ class LocoManipulationController:
             yaw_meas = yaw_ref_now + wrap_angle(yaw - yaw_ref_now)
             x0 = np.concatenate([[roll, pitch, yaw_meas], p_c, omega_w, v_c, [0, 0, -GRAVITY]])
             t_m = time.perf_counter()
-            mpc_sol = self._run_mpc(t, x0, p_c, v_c, p_feet, yaw_feet)
+            p_hands_mid = 0.5 * (
+                r.frame_position(self.desc.hand_frames[0])
+                + r.frame_position(self.desc.hand_frames[1])
+            )
+            mpc_sol = self._run_mpc(t, x0, p_c, v_c, p_feet, yaw_feet, p_hands_mid)
             mpc_time = time.perf_counter() - t_m
             if not mpc_sol.ok and self._last_mpc is None:
                 raise SolverFailure(t, "mpc", self.s.qp_backend, mpc_sol.status)
