@@ -1,0 +1,274 @@
+"""One WBC tick (task stacking, prioritised projection, QP build, QP solve) on recorded inputs.
+
+Records the whole-body controller's inputs from a closed-loop run of a scenario (default:
+the first seconds of scenarios/walk-square.yaml, stepping, turning and contact switches), or
+loads a recording, then replays every tick through `build_tasks`,
+`prioritized_acceleration` and `WholeBodyQp.solve` and prints median / p99 per piece
+(best of --repeat passes per tick, process time so that other processes on the machine
+count less), and how far the torques are from the recorded ones:
+
+    OMP_NUM_THREADS=1 .venv/bin/python benchmarks/wbc_tick.py [--seconds 6] [--repeat 5]
+    OMP_NUM_THREADS=1 .venv/bin/python benchmarks/wbc_tick.py --inputs tests/data/wbc_ticks.npz
+    .venv/bin/python benchmarks/wbc_tick.py --seconds 8 --every 40 --save tests/data/wbc_ticks.npz
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import locoplan.control.controller as controller_module
+from locoplan.control.tasks import TaskGains, build_tasks
+from locoplan.control.wbc import StanceContact, WholeBodyQp, prioritized_acceleration
+from locoplan.plan import compile_plan
+from locoplan.robot.description import load_robot_description
+from locoplan.scenario import load_scenario_file
+from locoplan.sim.loop import ClosedLoop
+from locoplan.sim.run import RunOptions, controller_settings, scene_for
+
+ROOT = Path(__file__).resolve().parents[1]
+GAIN_FIELDS = TaskGains.__slots__
+
+
+def record(scenario_path: str, seconds: float, every: int) -> dict[str, np.ndarray]:
+    """Run the scenario closed loop for `seconds` and keep every `every`-th WBC tick's inputs
+    and every tick at a contact switch (arrays stacked over ticks; see `tick_inputs` for how
+    they map back)."""
+    loaded = load_scenario_file(scenario_path)
+    sc = loaded.scenario
+    plan = compile_plan(sc, None)
+    desc = load_robot_description(sc.robot)
+    settings = controller_settings(sc, RunOptions(log=False))
+    rows: list[dict[str, Any]] = []
+    current: dict[str, Any] = {}
+    count = [0]
+    prev_stance: list[tuple[bool, ...]] = [()]
+    orig_build = controller_module.build_tasks
+    orig_solve = WholeBodyQp.solve
+
+    def rec_build(g: TaskGains, *args: Any) -> Any:
+        (q, v, R, omega, p_des, v_des, yaw_des, yaw_rate_des, J_base, dJv_base, stance) = args[:11]
+        (J_feet, dJv_feet, v_feet, p_feet, R_feet, swing, J_hands, dJv_hands, hand_acc) = args[11:]
+        current.clear()
+        sw = np.zeros((2, 3, 3))
+        sw_yaw = np.zeros(2)
+        for i, (p, vv, a, y) in enumerate(swing):
+            sw[i] = (p, vv, a)
+            sw_yaw[i] = y
+        current.update(
+            gains=[np.atleast_1d(np.asarray(getattr(g, f), dtype=float)) for f in GAIN_FIELDS],
+            q=q,
+            v=v,
+            R=R,
+            omega=omega,
+            p_des=p_des,
+            v_des=v_des,
+            yaw_des=yaw_des,
+            yaw_rate_des=yaw_rate_des,
+            J_base=J_base,
+            dJv_base=dJv_base,
+            stance=np.array(stance, dtype=bool),
+            J_feet=np.array(J_feet),
+            dJv_feet=np.array(dJv_feet),
+            v_feet=np.array(v_feet),
+            p_feet=np.array(p_feet),
+            R_feet=np.array(R_feet),
+            n_swing=len(swing),
+            swing_pva=sw,
+            swing_yaw=sw_yaw,
+            J_hands=np.array(J_hands),
+            dJv_hands=np.array(dJv_hands),
+            hand_acc=np.array(hand_acc),
+        )
+        return orig_build(g, *args)
+
+    def rec_solve(
+        self: WholeBodyQp,
+        M: np.ndarray,
+        h: np.ndarray,
+        qdd_cmd: np.ndarray,
+        stance: list[StanceContact],
+        tau_ext: np.ndarray,
+    ) -> Any:
+        out = orig_solve(self, M, h, qdd_cmd, stance, tau_ext)
+        count[0] += 1
+        st = tuple(bool(x) for x in current.get("stance", ()))
+        switched = st != prev_stance[0]
+        prev_stance[0] = st
+        if current and ((count[0] - 1) % every == 0 or switched):
+            yaw = np.zeros(2)
+            w5 = np.zeros((2, 5))
+            ks = np.flatnonzero(current["stance"])
+            for k, c in zip(ks, stance, strict=True):
+                yaw[k] = c.yaw
+                w5[k] = c.w5
+            row = dict(current)
+            row.update(
+                M=M.copy(),
+                h=h.copy(),
+                qdd_cmd=qdd_cmd.copy(),
+                contact_yaw=yaw,
+                contact_w5=w5,
+                tau_ext=tau_ext.copy(),
+                tau=out.tau.copy(),
+                wbc_ok=out.ok,
+            )
+            rows.append(row)
+        return out
+
+    controller_module.build_tasks = rec_build  # type: ignore[assignment]
+    WholeBodyQp.solve = rec_solve  # type: ignore[method-assign]
+    try:
+        start = sc.robot_start
+        loop = ClosedLoop(
+            scene_for(sc, desc),
+            desc,
+            plan,
+            settings,
+            start_xy=(start.position[0], start.position[1]),
+            start_yaw=math.radians(start.yaw),
+        )
+        loop.run(min(seconds, plan.t_end))
+    finally:
+        controller_module.build_tasks = orig_build
+        WholeBodyQp.solve = orig_solve  # type: ignore[method-assign]
+    out: dict[str, np.ndarray] = {}
+    for key in rows[0]:
+        if key == "gains":
+            for f, val in zip(GAIN_FIELDS, rows[0]["gains"], strict=True):
+                out[f"gain_{f}"] = np.asarray(val, dtype=float)
+        else:
+            out[key] = np.array([r[key] for r in rows])
+    out["tau_limits"] = np.asarray(desc.torque_limits, dtype=float)
+    return out
+
+
+def tick_inputs(rec: dict[str, np.ndarray], i: int) -> tuple[tuple[Any, ...], dict[str, Any]]:
+    """(build_tasks arguments, the rest of the tick: M, h, stance contacts, tau_ext) of tick i."""
+    gains = TaskGains(
+        *(
+            tuple(float(x) for x in rec[f"gain_{f}"])
+            if rec[f"gain_{f}"].size > 1
+            else float(rec[f"gain_{f}"][0])
+            for f in GAIN_FIELDS
+        )
+    )
+    stance = tuple(bool(s) for s in rec["stance"][i])
+    swing = [
+        (
+            rec["swing_pva"][i, j, 0],
+            rec["swing_pva"][i, j, 1],
+            rec["swing_pva"][i, j, 2],
+            float(rec["swing_yaw"][i, j]),
+        )
+        for j in range(int(rec["n_swing"][i]))
+    ]
+    args = (
+        gains,
+        rec["q"][i],
+        rec["v"][i],
+        rec["R"][i],
+        rec["omega"][i],
+        rec["p_des"][i],
+        rec["v_des"][i],
+        float(rec["yaw_des"][i]),
+        float(rec["yaw_rate_des"][i]),
+        rec["J_base"][i],
+        rec["dJv_base"][i],
+        stance,
+        list(rec["J_feet"][i]),
+        list(rec["dJv_feet"][i]),
+        list(rec["v_feet"][i]),
+        rec["p_feet"][i],
+        list(rec["R_feet"][i]),
+        swing,
+        list(rec["J_hands"][i]),
+        list(rec["dJv_hands"][i]),
+        rec["hand_acc"][i],
+    )
+    contacts = [
+        StanceContact(rec["J_feet"][i, k], float(rec["contact_yaw"][i, k]), rec["contact_w5"][i, k])
+        for k in range(2)
+        if stance[k]
+    ]
+    rest = {"M": rec["M"][i], "h": rec["h"][i], "contacts": contacts, "tau_ext": rec["tau_ext"][i]}
+    return args, rest
+
+
+def _best(fn: Callable[[], Any], repeat: int, clock: Callable[[], float]) -> tuple[float, Any]:
+    best, out = math.inf, None
+    for _ in range(repeat):
+        t0 = clock()
+        out = fn()
+        best = min(best, clock() - t0)
+    return best, out
+
+
+def replay(rec: dict[str, np.ndarray], repeat: int) -> dict[str, np.ndarray]:
+    """Per-tick times (s) of each piece, best of `repeat`, and the torque error (N m)."""
+    n = rec["q"].shape[0]
+    wbc = WholeBodyQp(rec["tau_limits"])
+    clock = time.process_time if repeat == 1 else time.perf_counter
+    res: dict[str, list[float]] = {
+        k: [] for k in ("tasks", "projection", "qp_build", "qp_solve", "total", "tau_err")
+    }
+    for i in range(n):
+        args, rest = tick_inputs(rec, i)
+        t_tasks, tasks = _best(lambda args=args: build_tasks(*args), repeat, clock)
+        t_proj, qdd = _best(lambda tasks=tasks: prioritized_acceleration(tasks, 22), repeat, clock)
+        best_build, best_solve, best_total = math.inf, math.inf, math.inf
+        out = None
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            out = wbc.solve(rest["M"], rest["h"], qdd, rest["contacts"], rest["tau_ext"])
+            best_total = min(best_total, time.perf_counter() - t0)
+            best_build = min(best_build, out.build_time_s)
+            best_solve = min(best_solve, out.solve_time_s)
+        assert out is not None
+        res["tasks"].append(t_tasks)
+        res["projection"].append(t_proj)
+        res["qp_build"].append(best_build)
+        res["qp_solve"].append(best_solve)
+        res["total"].append(t_tasks + t_proj + best_total)
+        res["tau_err"].append(float(np.max(np.abs(out.tau - rec["tau"][i]))))
+    return {k: np.asarray(v) for k, v in res.items()}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenario", default=str(ROOT / "scenarios/walk-square.yaml"))
+    parser.add_argument("--seconds", type=float, default=6.0, help="simulated time to record")
+    parser.add_argument("--every", type=int, default=1, help="keep every n-th tick")
+    parser.add_argument("--inputs", help="replay this recording (.npz) instead of recording")
+    parser.add_argument("--save", help="save the recording (.npz) here")
+    parser.add_argument("--repeat", type=int, default=5, help="best of N per tick and piece")
+    args = parser.parse_args()
+    if args.inputs:
+        with np.load(args.inputs, allow_pickle=False) as f:
+            rec = {k: f[k] for k in f.files}
+    else:
+        rec = record(args.scenario, args.seconds, args.every)
+        if args.save:
+            np.savez_compressed(args.save, **rec)  # type: ignore[arg-type]
+    n = rec["q"].shape[0]
+    n_st = rec["stance"].sum(axis=1)
+    print(
+        f"{n} ticks: {int(np.sum(n_st == 2))} double support, {int(np.sum(n_st == 1))} single, "
+        f"{int(np.sum(n_st == 0))} none"
+    )
+    res = replay(rec, args.repeat)
+    for k in ("tasks", "projection", "qp_build", "qp_solve", "total"):
+        a = res[k] * 1e6
+        print(f"{k:<11} us  median {np.median(a):7.1f}  p99 {np.percentile(a, 99):7.1f}")
+    err = res["tau_err"]
+    print(f"torque vs recorded  max {np.max(err):.2e} N m  median {np.median(err):.2e} N m")
+
+
+if __name__ == "__main__":
+    main()
