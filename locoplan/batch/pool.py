@@ -71,6 +71,10 @@ def _child_main(job: Job, conn: Connection) -> None:
     try:
         outcome = execute_job(job, progress)
         conn.send(("done", outcome))
+    except KeyboardInterrupt:
+        # Ctrl-C reaches the whole process group; the parent reports it. Leaving quietly
+        # (the MCAP was closed on the way out) keeps multiprocessing from printing a traceback.
+        raise SystemExit(130) from None
     finally:
         conn.close()
 
