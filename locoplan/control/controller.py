@@ -48,7 +48,7 @@ from locoplan.robot.pinocchio_model import PinocchioRobot
 FloatArray = npt.NDArray[np.float64]
 
 GRAVITY = 9.81
-LOAD_RAMP = 0.8  # s over which a lifted (or placed) object's weight comes on (goes off)
+LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (goes off)
 LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
 FEET = ("L", "R")
 

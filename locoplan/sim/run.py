@@ -225,6 +225,8 @@ def compute_metrics(
     for name in scenario.objects:
         if rec.object_positions[name]:
             p, on, _ = _object_state(scenario, rec, name)
+            if name in rec.held_at_end:
+                on = None  # in the hands, even if just above a fixture's top
             # Held: in the hands' grasp and not resting on anything (a grasp that never lifted
             # the object off its table does not count).
             objects[name] = {
