@@ -568,12 +568,14 @@ def batch_command(
 
       locoplan batch scenarios/stand.yaml scenarios/step.yaml --fail-fast
     """
+    import time
     from pathlib import Path
 
     from locoplan.batch import (
         CACHE_DIRNAME,
         BatchInputError,
         batch_exit_code,
+        default_workers,
         prepare_batch,
         run_batch,
         write_junit,
@@ -587,6 +589,7 @@ def batch_command(
     except BatchInputError as exc:
         _fail(EXIT_BAD_INPUT, str(exc))
     restore = install_termination_handlers()
+    started = time.perf_counter()
     try:
         with _LiveProgress(len(cases), "batch") as progress:
             results = run_batch(
@@ -604,6 +607,9 @@ def batch_command(
     finally:
         restore()
     _print_table(batch_table(results))
+    workers = jobs or default_workers()
+    elapsed = time.perf_counter() - started
+    err.print(f"{len(results)} scripts in {elapsed:.1f} s on {workers} workers", markup=False)
     if junit is not None:
         try:
             write_junit(results, Path(junit))
