@@ -62,7 +62,7 @@ def test_run_writes_metrics_and_log(tmp_path: Path) -> None:
     assert log.complete
     assert log.scenario_text == SHORT_STAND
     assert log.metrics is not None and log.metrics["scenario"] == "short-stand"
-    for topic in ("/tf", "/joint_states", "/contact/schedule", "/mpc/solution", "/events"):
+    for topic in ("/tf", "/joint_states", "/contact/schedule", "/mpc/solution", "/wbc", "/events"):
         assert topic in log.topics, topic
     assert "Traceback" not in res.stderr
 

@@ -149,6 +149,31 @@ class ClosedLoop:
                 f += np.asarray(p.force)
         self.backend.set_trunk_force(f)
 
+    def _log_mpc(self, t: float, out: ControlOutput) -> None:
+        """Every MPC update: first-step wrenches, the planned forces over the horizon, the
+        predicted trunk trajectory, status and times."""
+        assert self.log is not None and out.mpc is not None
+        m = out.mpc
+        X = np.asarray(m.X)
+        self.log.json(
+            "/mpc/solution",
+            t,
+            {
+                "ok": m.ok,
+                "status": m.status,
+                "fallback": m.fallback,
+                "iterations": m.iterations,
+                "forces_world": m.forces_world,
+                "moments_world": m.moments_world,
+                "planned_U": np.asarray(m.U),
+                "predicted_com": X[:, 3:6],
+                "predicted_rpy_deg": np.degrees(X[:, 0:3]),
+                "update_ms": out.mpc_time_s * 1e3,
+                "build_ms": m.build_time_s * 1e3,
+                "solve_ms": m.solve_time_s * 1e3,
+            },
+        )
+
     def _log_plan_events(self, t: float) -> None:
         """Plan events (task start/end, lift-off, touchdown, grasp, release) as they happen."""
         assert self.log is not None
@@ -221,6 +246,8 @@ class ClosedLoop:
                     split["wbc"] += out.wbc_time_s
                     if out.mpc is not None:
                         rec.mpc_times_s.append(out.mpc_time_s)
+                        if self.log is not None:
+                            self._log_mpc(t, out)
                         if out.mpc.fallback != "none":
                             rec.n_mpc_fallbacks += 1
                     if out.wbc is not None:
@@ -253,17 +280,23 @@ class ClosedLoop:
                     rec.stance.append(out.stance)
                     self._record(be.time, applied, None)
                     self._view_sample(be.time, out, applied)
-                    if self.log is not None and out.mpc is not None:
+                    if self.log is not None and out.wbc is not None:
+                        w = out.wbc
                         self.log.json(
-                            "/mpc/solution",
+                            "/wbc",
                             t,
                             {
-                                "ok": out.mpc.ok,
-                                "status": out.mpc.status,
-                                "forces_world": out.mpc.forces_world,
-                                "moments_world": out.mpc.moments_world,
-                                "predicted_com": np.asarray(out.mpc.X)[:, 3:6],
-                                "solve_ms": out.mpc_time_s * 1e3,
+                                "ok": w.ok,
+                                "status": w.status,
+                                "iterations": w.iterations,
+                                "tau": out.tau,
+                                "tau_clipped": out.tau_clipped,
+                                "n_clipped": out.n_clipped,
+                                "delta_base_acc": w.delta_base,
+                                "contact_w5": [list(x) for x in w.w5],
+                                "tick_ms": out.wbc_time_s * 1e3,
+                                "build_ms": w.build_time_s * 1e3,
+                                "solve_ms": w.solve_time_s * 1e3,
                             },
                         )
                     if self.log is not None:
