@@ -84,3 +84,33 @@ def test_throw_releases_and_robot_stays_up(tmp_path: Path) -> None:
     kinds = [(k, o) for _, k, o in rec.grasp_events]
     assert ("grasp", "ball") in kinds and ("release", "ball") in kinds
     assert "ball" not in rec.held_at_end
+
+
+def test_out_of_reach_pick_is_a_failed_expectation(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    text = """version: 1
+name: too-far
+objects:
+  box: {shape: box, size: [0.2, 0.2, 0.15], mass: 2.0, position: [0.9, 0.0, 0.545]}
+fixtures:
+  table: {kind: table, position: [0.9, 0.0, 0.0], size: [0.4, 0.4, 0.47]}
+tasks:
+  - {action: pick, object: box, start: 0.2, duration: 1.0}
+end: 2.0
+"""
+    path = tmp_path / "too-far.yaml"
+    path.write_text(text)
+    res = subprocess.run(
+        [sys.executable, "-m", "locoplan.cli", "run", str(path), "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert res.returncode == 1, res.stderr
+    assert "Traceback" not in res.stdout + res.stderr
+    # The failed expectation names the object and how far the hands stayed from it.
+    assert "pick.box" in res.stdout
+    assert "m from 'box'" in res.stdout

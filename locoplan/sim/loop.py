@@ -72,6 +72,8 @@ class RunRecord:
     n_ticks: int = 0
     # (time, kind, object) for grasp, grasp_failed and release.
     grasp_events: list[tuple[float, str, str]] = field(default_factory=list)
+    # For a failed grasp: the object -> the hands' largest distance (m) from its surface.
+    grasp_failures: dict[str, float] = field(default_factory=dict)
     held_at_end: set[str] = field(default_factory=set)
     n_clipped: int = 0
     n_mpc_fallbacks: int = 0
@@ -257,6 +259,8 @@ class ClosedLoop:
                 rec.n_clipped += out.n_clipped
                 for kind, fields in self.grasp.update(t, be.data):
                     rec.grasp_events.append((t, kind, str(fields["object"])))
+                    if kind == "grasp_failed":
+                        rec.grasp_failures[str(fields["object"])] = float(fields["gap_m"])  # type: ignore[arg-type]
                     if self.log is not None:
                         self.log.event(t, kind, **fields)
                 self.conveyor.apply(be.data, self.grasp.held_objects())

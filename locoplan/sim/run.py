@@ -272,6 +272,14 @@ def compute_metrics(
     }
     expect = scenario.expect.model_dump(exclude_none=True)
     results = expectation_results(expect, metrics)
+    # A pick whose hands never reached the object is a failed expectation of every script
+    # (exit 1), named after the object, with the distance the hands stayed away.
+    for name, gap in rec.grasp_failures.items():
+        results[f"pick.{name}"] = {
+            "ok": False,
+            "value": f"hands {gap:.3f} m from '{name}' at the planned grasp",
+            "limit": "within 0.03 m (the object may be out of reach)",
+        }
     metrics["expectations"] = results
     metrics["passed"] = all(r["ok"] for r in results.values())
     metrics["log"] = str(log_path) if log_path is not None else None
