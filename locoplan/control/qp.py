@@ -663,3 +663,116 @@ def solve_qp(
 ) -> QpSolution:
     """One-shot solve with a fresh `QpSolver` (for tests and scripts; loops keep a solver)."""
     return QpSolver(backend, settings).solve(problem)
+
+
+# --- lean path: small dense QPs with inequality rows only, solved every control tick -------
+
+
+class LeanDenseQp:
+    """Lean solver for a small dense QP ``min 1/2 x'Hx + g'x`` s.t. ``l <= C x <= u`` solved
+    again and again with new data (e.g. the WBC QP of one stance configuration, every tick).
+
+    ``solve`` skips `QpProblem`'s validation and `QpSolver.solve`'s scaling, residual and
+    complementarity checks, which cost more than the solve itself at this size. It factorises
+    H (LAPACK potrf), takes the unconstrained minimiser if it meets every bound to
+    ``settings.eps_abs`` (the usual case in a WBC), else runs the dual active-set method of
+    `qp_active_set` with that factor, started from the active set of this object's previous
+    solution. That start changes only the iteration count, never the result (the method is
+    exact: any dual-feasible start ends at the same optimum), so it cannot go wrong at a
+    contact switch the way proxsuite's warm starts did (stack-notes.md). The result is a KKT
+    point by construction (stationarity exact, multipliers >= 0, bounds met to eps_abs),
+    hence no complementarity check.
+
+    Statuses: "solved"; "primal_infeasible" (the active-set method's Farkas certificate);
+    "max_iterations" (more than ``settings.active_set_iter`` iterations); "numerical_error"
+    (H not positive definite). The caller guarantees the shapes (H (n, n) symmetric positive
+    definite, g (n,), C (m, n), l/u (m,) with +-inf for absent bounds) and finite data, and
+    decides what to do on failure (e.g. solve the problem through `QpSolver`). No array
+    passed in is kept.
+    """
+
+    def __init__(self, settings: QpSettings | None = None) -> None:
+        # Imported here to keep this path in one block of the module.
+        from scipy.linalg import get_lapack_funcs
+
+        self.settings = settings if settings is not None else QpSettings(active_set_iter=50)
+        if self.settings.active_set_iter < 1:
+            raise ValueError("LeanDenseQp needs QpSettings.active_set_iter >= 1")
+        self._potrf, self._potrs = get_lapack_funcs(("potrf", "potrs"), dtype=np.float64)
+        self._hint: npt.NDArray[np.intp] | None = None
+
+    def reset(self) -> None:
+        """Forget the previous solution's active set."""
+        self._hint = None
+
+    def solve(
+        self, H: FloatArray, g: FloatArray, C: FloatArray, l: FloatArray, u: FloatArray
+    ) -> QpSolution:
+        """Solve; never raises on solver failure (check ``ok``/``status``)."""
+        t0 = time.perf_counter()
+        s = self.settings
+        tol = s.eps_abs
+        n, m = g.shape[0], C.shape[0]
+        # H is symmetric: H.T is a column-major view that LAPACK takes without a copy.
+        factor, info = self._potrf(H.T, lower=1, clean=0, overwrite_a=0)
+        if info != 0:
+            self._hint = None
+            return self._solution(t0, np.full(n, math.nan), "numerical_error", 0, math.inf, m)
+        x = self._potrs(factor, g, lower=1)[0]
+        np.negative(x, out=x)
+        Cx = C.dot(x)
+        viol = max(float(np.max(l - Cx, initial=0.0)), float(np.max(Cx - u, initial=0.0)))
+        if viol <= tol:
+            self._hint = None
+            return self._solution(t0, x, "solved", 0, viol, m, 0.5 * float(g.dot(x)))
+        r = solve_dual_active_set(
+            H,
+            g,
+            C,
+            l,
+            u,
+            tol=tol,
+            max_iter=s.active_set_iter,
+            initial_active=self._hint,
+            cholesky=factor,
+        )
+        if r.status == "solved":
+            nz = np.flatnonzero(r.z_in)
+            self._hint = constraint_ids(m, n, nz, r.z_in[nz] > 0.0)
+            objective = float(0.5 * r.x.dot(H.dot(r.x)) + g.dot(r.x))
+            return self._solution(
+                t0, r.x, "solved", r.iterations, r.max_violation, m, objective, r.z_in
+            )
+        self._hint = None
+        status = "primal_infeasible" if r.status == "infeasible" else "max_iterations"
+        return self._solution(t0, r.x, status, r.iterations, r.max_violation, m)
+
+    @staticmethod
+    def _solution(
+        t0: float,
+        x: FloatArray,
+        status: str,
+        iterations: int,
+        violation: float,
+        m: int,
+        objective: float = math.nan,
+        z_in: FloatArray | None = None,
+    ) -> QpSolution:
+        n = x.shape[0]
+        return QpSolution(
+            x=x,
+            status=status,
+            ok=status == "solved",
+            iterations=iterations,
+            solve_time_s=time.perf_counter() - t0,
+            setup_time_s=0.0,
+            primal_residual=violation,
+            dual_residual=0.0,
+            objective=objective,
+            backend="active_set",
+            reused=False,
+            active_set=True,
+            y_eq=np.zeros(0),
+            z_in=np.zeros(m) if z_in is None else z_in,
+            z_box=np.zeros(n),
+        )
