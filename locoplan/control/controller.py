@@ -166,6 +166,7 @@ class LocoManipulationController:
         # Planned touchdown points by (foot, touchdown time), refreshed at every MPC update
         # (10 ms) and shared by the MPC's horizon and the swing trajectories.
         self._footholds: dict[tuple[int, float], tuple[FloatArray, float]] = {}
+        self._shift_now = np.zeros(2)
         # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
         self._cols_leg = [np.arange(6, 11), np.arange(11, 16)]
         self._cols_arm = [np.arange(16, 19), np.arange(19, 22)]
@@ -225,7 +226,7 @@ class LocoManipulationController:
         # the support centre under the planned trunk, with the CoM shifted back over them
         # (placing them relative to the shifted CoM walked the robot backwards under a load).
         p = p_c + (p_ref[1] - p_ref[0]) + off
-        p[:2] -= self._com_shift(np.array([t]))[0]
+        p[:2] -= self._shift_now
         p[:2] += v_ref[1, :2] * stance_time / 2.0 + self.s.raibert_gain * (v_c[:2] - v_ref[0, :2])
         p[2] = 0.0
         return p, yaw_td
@@ -364,6 +365,8 @@ class LocoManipulationController:
         dyn_time = time.perf_counter() - t_dyn
 
         stance = tuple(bool(self.plan.foot_stance(k, t)) for k in range(2))
+        # The held-load CoM shift at this tick (footholds and the trunk task both use it).
+        self._shift_now = self._com_shift(np.array([t]))[0]
         # Swing bookkeeping: remember where each swing started.
         for k in range(2):
             if not stance[k] and self._last_contact[k]:
@@ -476,8 +479,7 @@ class LocoManipulationController:
                 v,
                 R,
                 omega_w,
-                np.asarray(ref.position, dtype=float)
-                + np.append(self._com_shift(np.array([t]))[0], 0.0),
+                np.asarray(ref.position, dtype=float) + np.append(self._shift_now, 0.0),
                 np.asarray(ref.velocity, dtype=float),
                 float(ref.yaw),
                 float(ref.yaw_rate),
