@@ -674,36 +674,42 @@ class LeanDenseQp:
 
     ``solve`` skips `QpProblem`'s validation and `QpSolver.solve`'s scaling, residual and
     complementarity checks, which cost more than the solve itself at this size. It factorises
-    H (LAPACK potrf), takes the unconstrained minimiser if it meets every bound to
-    ``settings.eps_abs`` (the usual case in a WBC), else runs the dual active-set method of
-    `qp_active_set` with that factor, started from the active set of this object's previous
-    solution. That start changes only the iteration count, never the result (the method is
-    exact: any dual-feasible start ends at the same optimum), so it cannot go wrong at a
-    contact switch the way proxsuite's warm starts did (stack-notes.md). The result is a KKT
-    point by construction (stationarity exact, multipliers >= 0, bounds met to eps_abs),
-    hence no complementarity check.
+    H (LAPACK potrf) and takes the unconstrained minimiser if it meets every bound to
+    ``settings.eps_abs`` (the usual case in a WBC). Otherwise it guesses the active set --
+    the previous solution's, then the guess's constraints with positive multipliers plus the
+    violated ones, at most ``guess_rounds`` times -- and solves the equality-constrained QP of
+    each guess (Schur complement with H's factor). A guess whose multipliers are >= 0 and
+    whose point meets every bound is a KKT point, hence the optimum (H positive definite): a
+    guess can only cost time, never change the result, so it cannot go wrong at a contact
+    switch the way proxsuite's warm starts did (stack-notes.md). If no guess works, the dual
+    active-set method of `qp_active_set` (exact, started cold) runs for at most
+    ``settings.active_set_iter`` iterations. The result meets the KKT conditions by
+    construction (stationarity exact, multipliers >= 0, bounds to eps_abs), hence no
+    complementarity check.
 
     Statuses: "solved"; "primal_infeasible" (the active-set method's Farkas certificate);
-    "max_iterations" (more than ``settings.active_set_iter`` iterations); "numerical_error"
-    (H not positive definite). The caller guarantees the shapes (H (n, n) symmetric positive
-    definite, g (n,), C (m, n), l/u (m,) with +-inf for absent bounds) and finite data, and
-    decides what to do on failure (e.g. solve the problem through `QpSolver`). No array
-    passed in is kept.
+    "max_iterations"; "numerical_error" (H not positive definite). ``iterations`` counts
+    guesses tried plus active-set iterations. The caller guarantees the shapes (H (n, n)
+    symmetric positive definite, g (n,), C (m, n), l/u (m,) with +-inf for absent bounds) and
+    finite data, and decides what to do on failure (e.g. solve it through `QpSolver`). No
+    array passed in is kept.
     """
 
-    def __init__(self, settings: QpSettings | None = None) -> None:
+    def __init__(self, settings: QpSettings | None = None, guess_rounds: int = 3) -> None:
         # Imported here to keep this path in one block of the module.
         from scipy.linalg import get_lapack_funcs
 
         self.settings = settings if settings is not None else QpSettings(active_set_iter=50)
         if self.settings.active_set_iter < 1:
             raise ValueError("LeanDenseQp needs QpSettings.active_set_iter >= 1")
+        self.guess_rounds = guess_rounds
         self._potrf, self._potrs = get_lapack_funcs(("potrf", "potrs"), dtype=np.float64)
-        self._hint: npt.NDArray[np.intp] | None = None
+        # Previous solution's active set: row of C -> True for its upper bound.
+        self._active: dict[int, bool] = {}
 
     def reset(self) -> None:
         """Forget the previous solution's active set."""
-        self._hint = None
+        self._active = {}
 
     def solve(
         self, H: FloatArray, g: FloatArray, C: FloatArray, l: FloatArray, u: FloatArray
@@ -716,36 +722,77 @@ class LeanDenseQp:
         # H is symmetric: H.T is a column-major view that LAPACK takes without a copy.
         factor, info = self._potrf(H.T, lower=1, clean=0, overwrite_a=0)
         if info != 0:
-            self._hint = None
+            self._active = {}
             return self._solution(t0, np.full(n, math.nan), "numerical_error", 0, math.inf, m)
-        x = self._potrs(factor, g, lower=1)[0]
-        np.negative(x, out=x)
-        Cx = C.dot(x)
-        viol = max(float(np.max(l - Cx, initial=0.0)), float(np.max(Cx - u, initial=0.0)))
+        x_u = self._potrs(factor, g, lower=1)[0]
+        np.negative(x_u, out=x_u)
+        Cx = C.dot(x_u)
+        viol = max(float((l - Cx).max(initial=0.0)), float((Cx - u).max(initial=0.0)))
         if viol <= tol:
-            self._hint = None
-            return self._solution(t0, x, "solved", 0, viol, m, 0.5 * float(g.dot(x)))
+            self._active = {}
+            objective = 0.5 * float(g.dot(x_u))  # H x_u = -g
+            return self._solution(t0, x_u, "solved", 0, viol, m, objective)
+        # Guesses: rows of C (int) -> True where the upper bound is active. With the guess's
+        # rows as equalities C_A x = bound_A: x = x_u + V mu, V = H^-1 C_A', mu = S^-1
+        # (bound_A - C_A x_u), S = C_A V, and z_A = -mu in H x + g + C' z = 0, which must be
+        # >= 0 on upper bounds and <= 0 on lower ones.
+        active: dict[int, bool] = {}
+        z_a: list[float] = []
+        rounds = 0
+        while True:
+            if rounds >= self.guess_rounds:
+                break
+            if rounds == 0 and self._active:
+                guess = self._active
+            else:
+                guess = {
+                    j: is_up
+                    for (j, is_up), z_j in zip(active.items(), z_a, strict=True)
+                    if (z_j > 0.0 if is_up else z_j < 0.0)
+                }
+                guess.update((int(j), False) for j in np.flatnonzero(Cx < l - tol))
+                guess.update((int(j), True) for j in np.flatnonzero(Cx > u + tol))
+                if guess == active:
+                    break
+            rounds += 1
+            active = guess
+            rows = list(active)
+            C_A = C[rows]
+            bound = np.array([u[j] if is_up else l[j] for j, is_up in active.items()])
+            # C_A' is column-major: LAPACK takes it without a copy.
+            V = self._potrs(factor, C_A.T, lower=1)[0]
+            Sf, info = self._potrf(C_A.dot(V), lower=1, clean=0, overwrite_a=1)
+            if info != 0:
+                break  # dependent rows: leave it to the active-set method
+            bound -= C_A.dot(x_u)
+            mu = self._potrs(Sf, bound, lower=1, overwrite_b=1)[0]
+            x = x_u + V.dot(mu)
+            Cx = C.dot(x)
+            viol = max(float((l - Cx).max(initial=0.0)), float((Cx - u).max(initial=0.0)))
+            z_a = (-mu).tolist()
+            if viol <= tol and all(
+                (z_j >= 0.0 if is_up else z_j <= 0.0)
+                for is_up, z_j in zip(active.values(), z_a, strict=True)
+            ):
+                self._active = active
+                z_in = np.zeros(m)
+                z_in[rows] = z_a
+                objective = float(0.5 * x.dot(H.dot(x)) + g.dot(x))
+                return self._solution(t0, x, "solved", rounds, viol, m, objective, z_in)
         r = solve_dual_active_set(
-            H,
-            g,
-            C,
-            l,
-            u,
-            tol=tol,
-            max_iter=s.active_set_iter,
-            initial_active=self._hint,
-            cholesky=factor,
+            H, g, C, l, u, tol=tol, max_iter=s.active_set_iter, cholesky=factor
         )
+        iterations = rounds + r.iterations
         if r.status == "solved":
             nz = np.flatnonzero(r.z_in)
-            self._hint = constraint_ids(m, n, nz, r.z_in[nz] > 0.0)
+            self._active = {int(j): bool(r.z_in[j] > 0.0) for j in nz}
             objective = float(0.5 * r.x.dot(H.dot(r.x)) + g.dot(r.x))
             return self._solution(
-                t0, r.x, "solved", r.iterations, r.max_violation, m, objective, r.z_in
+                t0, r.x, "solved", iterations, r.max_violation, m, objective, r.z_in
             )
-        self._hint = None
+        self._active = {}
         status = "primal_infeasible" if r.status == "infeasible" else "max_iterations"
-        return self._solution(t0, r.x, status, r.iterations, r.max_violation, m)
+        return self._solution(t0, r.x, status, iterations, r.max_violation, m)
 
     @staticmethod
     def _solution(
