@@ -726,7 +726,7 @@ class LeanDenseQp:
             return self._solution(t0, np.full(n, math.nan), "numerical_error", 0, math.inf, m)
         x_u = self._potrs(factor, g, lower=1)[0]
         np.negative(x_u, out=x_u)
-        Cx = C.dot(x_u)
+        Cx = Cx_u = C.dot(x_u)
         viol = max(float((l - Cx).max(initial=0.0)), float((Cx - u).max(initial=0.0)))
         if viol <= tol:
             self._active = {}
@@ -743,7 +743,12 @@ class LeanDenseQp:
             if rounds >= self.guess_rounds:
                 break
             if rounds == 0 and self._active:
-                guess = self._active
+                # Only rows with a finite bound on the guessed side (another problem's guess).
+                guess = {
+                    j: is_up
+                    for j, is_up in self._active.items()
+                    if j < m and math.isfinite(u[j] if is_up else l[j])
+                }
             else:
                 guess = {
                     j: is_up
@@ -752,8 +757,12 @@ class LeanDenseQp:
                 }
                 guess.update((int(j), False) for j in np.flatnonzero(Cx < l - tol))
                 guess.update((int(j), True) for j in np.flatnonzero(Cx > u + tol))
-                if guess == active:
-                    break
+            if not guess:
+                # Nothing usable kept: start over from the rows x_u violates.
+                guess = {int(j): False for j in np.flatnonzero(Cx_u < l - tol)}
+                guess.update((int(j), True) for j in np.flatnonzero(Cx_u > u + tol))
+            if guess == active:
+                break
             rounds += 1
             active = guess
             rows = list(active)
