@@ -9,6 +9,7 @@ LOCAL_WORLD_ALIGNED (rows: linear then angular velocity in world axes).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -43,23 +44,32 @@ def rot_z(yaw: float) -> FloatArray:
 
 def rotation_error(R_des: FloatArray, R: FloatArray) -> FloatArray:
     """World-frame rotation vector e with exp([e]x) R = R_des (log map of R_des R')."""
-    E = R_des @ R.T
-    cos_t = max(-1.0, min(1.0, (float(np.trace(E)) - 1.0) / 2.0))
+    E = R_des.dot(R.T)
+    (e00, e01, e02), (e10, e11, e12), (e20, e21, e22) = E.tolist()
+    cos_t = max(-1.0, min(1.0, (e00 + e11 + e22 - 1.0) / 2.0))
     theta = math.acos(cos_t)
-    w = np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]])
-    if theta < 1e-6:
-        return 0.5 * w
-    return theta / (2.0 * math.sin(theta)) * w
+    f = 0.5 if theta < 1e-6 else theta / (2.0 * math.sin(theta))
+    return np.array([f * (e21 - e12), f * (e02 - e20), f * (e10 - e01)])
+
+
+@functools.lru_cache(maxsize=8)
+def _trunk_gains(g: TaskGains) -> FloatArray:
+    """Rows kp_pos, kd_pos, kp_rot, kd_rot (4, 3) of the trunk gains, read-only."""
+    out = np.array([g.trunk_kp_pos, g.trunk_kd_pos, g.trunk_kp_rot, g.trunk_kd_rot], dtype=float)
+    out.flags.writeable = False
+    return out
 
 
 def _line_foot_rows(
-    J: FloatArray, dJv: FloatArray, R_foot: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """The 5 controllable rows of a line foot's Jacobian and drift: linear (3) and angular
-    about the foot's own y and z axes (2)."""
-    Jang = R_foot.T @ J[3:]
-    aang = R_foot.T @ dJv[3:]
-    return np.vstack([J[:3], Jang[1:]]), np.concatenate([dJv[:3], aang[1:]])
+    J: FloatArray, dJv: FloatArray, R_foot: FloatArray, J_out: FloatArray, b_out: FloatArray
+) -> None:
+    """Write the 5 controllable rows of a line foot's Jacobian and drift into J_out (5, nv)
+    and b_out (5,): linear (3) and angular about the foot's own y and z axes (2)."""
+    Ryz = R_foot[:, 1:].T
+    J_out[:3] = J[:3]
+    Ryz.dot(J[3:], out=J_out[3:])
+    b_out[:3] = dJv[:3]
+    b_out[3:] = Ryz.dot(dJv[3:])
 
 
 def build_tasks(
@@ -87,47 +97,51 @@ def build_tasks(
 ) -> list[AccelerationTask]:
     """Tasks in priority order. `swing` holds (p, v, a, yaw) targets of the swing feet in
     foot order; `hand_acc` (2, 3) the hands' commanded accelerations (world, m/s^2)."""
+    nv = J_base.shape[1]
     tasks: list[AccelerationTask] = []
-    rows_J, rows_b = [], []
-    for k in range(2):
-        if stance[k]:
-            Jk, bk = _line_foot_rows(J_feet[k], dJv_feet[k], R_feet[k])
-            rows_J.append(Jk)
-            rows_b.append(bk)
-    if rows_J:
-        Jc = np.vstack(rows_J)
-        tasks.append(AccelerationTask(Jc, np.concatenate(rows_b), np.zeros(Jc.shape[0])))
-    e_rot = rotation_error(rot_z(yaw_des), R_base)
-    w_des = np.array([0.0, 0.0, yaw_rate_des])
-    acc_rot = np.asarray(g.trunk_kp_rot) * e_rot + np.asarray(g.trunk_kd_rot) * (
-        w_des - omega_world
-    )
-    acc_pos = np.asarray(g.trunk_kp_pos) * (p_base_des - q[:3]) + np.asarray(g.trunk_kd_pos) * (
-        v_base_des - R_base @ v[:3]
-    )
+    feet = [k for k in range(2) if stance[k]]
+    if feet:
+        n = 5 * len(feet)
+        Jc = np.empty((n, nv))
+        bc = np.empty(n)
+        for i, k in enumerate(feet):
+            rows = slice(5 * i, 5 * i + 5)
+            _line_foot_rows(J_feet[k], dJv_feet[k], R_feet[k], Jc[rows], bc[rows])
+        tasks.append(AccelerationTask(Jc, bc, np.zeros(n)))
+    gains = _trunk_gains(g)
     # Position and orientation in one level: the base's 6 DoF are independent, so stacking
     # them costs one 6x6 solve instead of two 3x3 ones and changes nothing.
-    tasks.append(AccelerationTask(J_base, dJv_base, np.concatenate([acc_pos, acc_rot])))
-    rows_J, rows_b, rows_a = [], [], []
-    i_sw = 0
-    for k in range(2):
-        if stance[k] or i_sw >= len(swing):
-            continue
-        p_d, v_d, a_d, yaw_d = swing[i_sw]
-        i_sw += 1
-        a_lin = a_d + g.swing_kp * (p_d - p_feet[k]) + g.swing_kd * (v_d - v_feet[k][:3])
+    acc = np.empty(6)
+    e_rot = rotation_error(rot_z(yaw_des), R_base)
+    w_err = -omega_world
+    w_err[2] += yaw_rate_des
+    acc[3:] = gains[2] * e_rot + gains[3] * w_err
+    acc[:3] = gains[0] * (p_base_des - q[:3]) + gains[1] * (v_base_des - R_base.dot(v[:3]))
+    tasks.append(AccelerationTask(J_base, dJv_base, acc))
+    swings = [k for k in range(2) if not stance[k]][: len(swing)]
+    n_hand = sum(J.shape[0] for J in J_hands)
+    n = 5 * len(swings) + n_hand
+    J2 = np.empty((n, nv))
+    b2 = np.empty(n)
+    a2 = np.empty(n)
+    r = 0
+    for (p_d, v_d, a_d, yaw_d), k in zip(swing, swings, strict=False):
         Rf = R_feet[k]
-        e = Rf.T @ rotation_error(rot_z(yaw_d), Rf)
-        a_ang = g.swing_kp_rot * e - g.swing_kd_rot * (Rf.T @ v_feet[k][3:])
-        Jk, bk = _line_foot_rows(J_feet[k], dJv_feet[k], Rf)
-        rows_J.append(Jk)
-        rows_b.append(bk)
-        rows_a.append(np.concatenate([a_lin, a_ang[1:]]))
-    for k in range(2):
-        rows_J.append(J_hands[k])
-        rows_b.append(dJv_hands[k])
-        rows_a.append(hand_acc[k])
-    tasks.append(
-        AccelerationTask(np.vstack(rows_J), np.concatenate(rows_b), np.concatenate(rows_a))
-    )
+        vf = v_feet[k]
+        a2[r : r + 3] = a_d + g.swing_kp * (p_d - p_feet[k]) + g.swing_kd * (v_d - vf[:3])
+        # Angular error and rate in the foot frame; only its y and z rows are tasks.
+        Ryz = Rf[:, 1:].T
+        a2[r + 3 : r + 5] = g.swing_kp_rot * Ryz.dot(
+            rotation_error(rot_z(yaw_d), Rf)
+        ) - g.swing_kd_rot * Ryz.dot(vf[3:])
+        _line_foot_rows(J_feet[k], dJv_feet[k], Rf, J2[r : r + 5], b2[r : r + 5])
+        r += 5
+    for J, dJv, acc_h in zip(J_hands, dJv_hands, hand_acc, strict=True):
+        kh = J.shape[0]
+        J2[r : r + kh] = J
+        b2[r : r + kh] = dJv
+        a2[r : r + kh] = acc_h
+        r += kh
+    if n:
+        tasks.append(AccelerationTask(J2, b2, a2))
     return tasks
