@@ -497,14 +497,11 @@ class LocoManipulationController:
                 hand_acc,
             )
             qdd_cmd = prioritized_acceleration(tasks, 22)
-            contacts = []
-            for k in range(2):
-                if stance[k]:
-                    Rz = rot_z(float(yaw_feet[k]))
-                    f_loc = Rz.T @ wrench[k, :3]
-                    m_loc = Rz.T @ wrench[k, 3:]
-                    w5 = np.array([f_loc[0], f_loc[1], f_loc[2], m_loc[1], m_loc[2]])
-                    contacts.append(StanceContact(J_feet[k], float(yaw_feet[k]), w5))
+            contacts = [
+                StanceContact.from_world(J_feet[k], float(yaw_feet[k]), wrench[k])
+                for k in range(2)
+                if stance[k]
+            ]
             wbc_out = self.wbc.solve(r.M, r.h, qdd_cmd, contacts, tau_ext)
             tau = wbc_out.tau
         wbc_time = time.perf_counter() - t_w
