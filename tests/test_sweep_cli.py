@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from locoplan.batch.sweep import CSV_METRICS, WALL_TIME_COLUMNS
+from locoplan.batch.sweep_results import CSV_METRICS, WALL_TIME_COLUMNS
 from locoplan.cli import app
 
 LOCOPLAN = [sys.executable, "-m", "locoplan.cli"]

@@ -1,4 +1,4 @@
-"""Sweep grids: `--set` parsing, points written into the script and validated, rows and CSV
+"""Sweep grids: `--set` parsing, points written into the script and validated
 (locoplan/batch/sweep.py). No simulation."""
 
 from __future__ import annotations
@@ -8,18 +8,11 @@ from pathlib import Path
 import pytest
 
 from locoplan.batch.errors import SweepSpecError
-from locoplan.batch.job import Outcome
 from locoplan.batch.sweep import (
-    CSV_METRICS,
     build_points,
-    csv_text,
     format_value,
     parse_set,
     parse_values,
-    point_label,
-    sweep_exit_code,
-    sweep_jobs,
-    sweep_rows,
 )
 from locoplan.scenario import load_scenario
 
@@ -130,29 +123,3 @@ def test_duplicate_keys_and_empty_grids_are_refused(tmp_path: Path) -> None:
         build_points(tmp_path / "x.yaml", SCRIPT, [parse_set("end=2"), parse_set("end=3")])
     with pytest.raises(SweepSpecError, match="at least one"):
         build_points(tmp_path / "x.yaml", SCRIPT, [])
-
-
-def test_jobs_rows_and_csv(tmp_path: Path) -> None:
-    axes = [parse_set("objects.box.mass=-1,2,3")]
-    points = build_points(tmp_path / "lift.yaml", SCRIPT, axes)
-    jobs = sweep_jobs(points, axes, "lift", tmp_path / "lift.yaml", tmp_path / "out")
-    assert [j.job_id for j in jobs] == ["objects.box.mass=2", "objects.box.mass=3"]
-    assert [j.options.log_name for j in jobs] == ["lift-0001", "lift-0002"]
-    assert all(j.options.out_dir == tmp_path / "out" for j in jobs)
-    metrics = {
-        "fell": False, "completed": True, "completion_time": 1.5, "peak_torque_ratio": 0.4321,
-        "yaw_difference_deg": None, "passed": True, "real_time_factor": 1.7,
-    }  # fmt: skip
-    outcomes = {
-        point_label(axes, (2,)): Outcome("objects.box.mass=2", "passed", metrics),
-        point_label(axes, (3,)): Outcome("objects.box.mass=3", "error", message="run failed"),
-    }
-    rows = sweep_rows(axes, points, outcomes)
-    assert list(rows[0]) == ["objects.box.mass", *CSV_METRICS]
-    text = csv_text(axes, rows)
-    lines = text.splitlines()
-    assert lines[0] == "objects.box.mass," + ",".join(CSV_METRICS)
-    assert lines[1].startswith('-1,,,,,,,,"objects.box.mass=-1: invalid: ')
-    assert lines[2] == "2,false,true,1.5,0.4321,,true,1.7,"
-    assert lines[3] == "3,,,,,,,,run failed"
-    assert sweep_exit_code(points, outcomes) == 1

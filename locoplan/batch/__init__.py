@@ -24,19 +24,22 @@ from locoplan.batch.job import STATUSES, Job, Outcome, RunListener, Status, fail
 from locoplan.batch.junit import junit_xml, write_junit
 from locoplan.batch.pool import default_workers, run_local
 from locoplan.batch.sweep import (
+    SweepAxis,
+    SweepPoint,
+    build_points,
+    format_value,
+    parse_set,
+    point_label,
+    sweep_jobs,
+)
+from locoplan.batch.sweep_results import (
     BACKENDS,
     CSV_METRICS,
     PLOTTABLE,
     WALL_TIME_COLUMNS,
-    SweepAxis,
-    SweepPoint,
-    build_points,
     csv_text,
-    parse_set,
-    point_label,
     run_sweep,
     sweep_exit_code,
-    sweep_jobs,
     sweep_rows,
 )
 
@@ -68,6 +71,7 @@ __all__ = [
     "default_workers",
     "discover_scripts",
     "failed_expectations",
+    "format_value",
     "junit_xml",
     "metrics_path",
     "parse_set",

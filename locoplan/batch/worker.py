@@ -14,7 +14,7 @@ import traceback
 from collections.abc import Callable
 from dataclasses import replace
 
-from locoplan.batch.job import Job, Outcome
+from locoplan.batch.job import Job, Outcome, Status
 from locoplan.exceptions import ScenarioError, SimulationError, SolverFailure
 from locoplan.plan import PlanError
 
@@ -43,9 +43,9 @@ def execute_job(job: Job, progress: Progress | None = None) -> Outcome:
     start = time.perf_counter()
     _test_hooks(job)
 
-    def ended(status: str, message: str = "", detail: str = "") -> Outcome:
+    def ended(status: Status, message: str = "", detail: str = "") -> Outcome:
         wall = time.perf_counter() - start
-        return Outcome(job.job_id, status, None, message, detail, wall)  # type: ignore[arg-type]
+        return Outcome(job.job_id, status, None, message, detail, wall)
 
     try:
         loaded = load_scenario_file(job.source, job.text)
