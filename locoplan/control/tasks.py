@@ -9,7 +9,6 @@ LOCAL_WORLD_ALIGNED (rows: linear then angular velocity in world axes).
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
@@ -52,12 +51,21 @@ def rotation_error(R_des: FloatArray, R: FloatArray) -> FloatArray:
     return np.array([f * (e21 - e12), f * (e02 - e20), f * (e10 - e01)])
 
 
-@functools.lru_cache(maxsize=8)
-def _trunk_gains(g: TaskGains) -> FloatArray:
-    """Rows kp_pos, kd_pos, kp_rot, kd_rot (4, 3) of the trunk gains, read-only."""
-    out = np.array([g.trunk_kp_pos, g.trunk_kd_pos, g.trunk_kp_rot, g.trunk_kd_rot], dtype=float)
-    out.flags.writeable = False
-    return out
+Rows = list[list[float]]
+
+
+def _yaw_error(yaw: float, R: Rows) -> tuple[float, float, float]:
+    """`rotation_error(rot_z(yaw), R)` on plain floats (R as row lists): the log map of
+    E = R_z(yaw) R'."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
+    e00, e01 = c * r00 - s * r01, c * r10 - s * r11
+    e10, e11 = s * r00 + c * r01, s * r10 + c * r11
+    e02, e12 = c * r20 - s * r21, s * r20 + c * r21
+    cos_t = max(-1.0, min(1.0, (e00 + e11 + r22 - 1.0) / 2.0))
+    theta = math.acos(cos_t)
+    f = 0.5 if theta < 1e-6 else theta / (2.0 * math.sin(theta))
+    return f * (r12 - e12), f * (e02 - r02), f * (e10 - e01)
 
 
 def _line_foot_rows(
@@ -108,16 +116,28 @@ def build_tasks(
             rows = slice(5 * i, 5 * i + 5)
             _line_foot_rows(J_feet[k], dJv_feet[k], R_feet[k], Jc[rows], bc[rows])
         tasks.append(AccelerationTask(Jc, bc, np.zeros(n)))
-    gains = _trunk_gains(g)
     # Position and orientation in one level: the base's 6 DoF are independent, so stacking
-    # them costs one 6x6 solve instead of two 3x3 ones and changes nothing.
-    acc = np.empty(6)
-    e_rot = rotation_error(rot_z(yaw_des), R_base)
-    w_err = -omega_world
-    w_err[2] += yaw_rate_des
-    acc[3:] = gains[2] * e_rot + gains[3] * w_err
-    acc[:3] = gains[0] * (p_base_des - q[:3]) + gains[1] * (v_base_des - R_base.dot(v[:3]))
-    tasks.append(AccelerationTask(J_base, dJv_base, acc))
+    # them costs one 6x6 solve instead of two 3x3 ones and changes nothing. 3-vector
+    # arithmetic on floats: a numpy call per operation would cost several times more.
+    R = R_base.tolist()
+    ex, ey, ez = _yaw_error(yaw_des, R)
+    wx, wy, wz = omega_world.tolist()
+    kp, kd = g.trunk_kp_rot, g.trunk_kd_rot
+    acc_rot = (
+        kp[0] * ex - kd[0] * wx,
+        kp[1] * ey - kd[1] * wy,
+        kp[2] * ez + kd[2] * (yaw_rate_des - wz),
+    )
+    vb = v[:3].tolist()
+    v_world = [r[0] * vb[0] + r[1] * vb[1] + r[2] * vb[2] for r in R]
+    kp, kd = g.trunk_kp_pos, g.trunk_kd_pos
+    acc_pos = [
+        kp[i] * (pd - qi) + kd[i] * (vd - vw)
+        for i, (pd, qi, vd, vw) in enumerate(
+            zip(p_base_des.tolist(), q[:3].tolist(), v_base_des.tolist(), v_world, strict=True)
+        )
+    ]
+    tasks.append(AccelerationTask(J_base, dJv_base, np.array([*acc_pos, *acc_rot])))
     swings = [k for k in range(2) if not stance[k]][: len(swing)]
     n_hand = sum(J.shape[0] for J in J_hands)
     n = 5 * len(swings) + n_hand
@@ -126,15 +146,24 @@ def build_tasks(
     a2 = np.empty(n)
     r = 0
     for (p_d, v_d, a_d, yaw_d), k in zip(swing, swings, strict=False):
-        Rf = R_feet[k]
-        vf = v_feet[k]
-        a2[r : r + 3] = a_d + g.swing_kp * (p_d - p_feet[k]) + g.swing_kd * (v_d - vf[:3])
+        Rf = R_feet[k].tolist()
+        vf = v_feet[k].tolist()
+        sw_kp, sw_kd = g.swing_kp, g.swing_kd
+        acc = [
+            a + sw_kp * (pd - p) + sw_kd * (vd - vv)
+            for a, pd, p, vd, vv in zip(
+                a_d.tolist(), p_d.tolist(), p_feet[k].tolist(), v_d.tolist(), vf, strict=False
+            )
+        ]
         # Angular error and rate in the foot frame; only its y and z rows are tasks.
-        Ryz = Rf[:, 1:].T
-        a2[r + 3 : r + 5] = g.swing_kp_rot * Ryz.dot(
-            rotation_error(rot_z(yaw_d), Rf)
-        ) - g.swing_kd_rot * Ryz.dot(vf[3:])
-        _line_foot_rows(J_feet[k], dJv_feet[k], Rf, J2[r : r + 5], b2[r : r + 5])
+        e = _yaw_error(yaw_d, Rf)
+        for j in (1, 2):
+            col = [Rf[0][j], Rf[1][j], Rf[2][j]]
+            e_j = col[0] * e[0] + col[1] * e[1] + col[2] * e[2]
+            w_j = col[0] * vf[3] + col[1] * vf[4] + col[2] * vf[5]
+            acc.append(g.swing_kp_rot * e_j - g.swing_kd_rot * w_j)
+        a2[r : r + 5] = acc
+        _line_foot_rows(J_feet[k], dJv_feet[k], R_feet[k], J2[r : r + 5], b2[r : r + 5])
         r += 5
     for J, dJv, acc_h in zip(J_hands, dJv_hands, hand_acc, strict=True):
         kh = J.shape[0]
