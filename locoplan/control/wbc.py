@@ -42,7 +42,9 @@ FloatArray = npt.NDArray[np.float64]
 
 NV_BASE = 6
 
-_potrf, _potrs = scipy.linalg.get_lapack_funcs(("potrf", "potrs"), dtype=np.float64)
+_potrf, _potrs, _trtri = scipy.linalg.get_lapack_funcs(
+    ("potrf", "potrs", "trtri"), dtype=np.float64
+)
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,9 +78,10 @@ def prioritized_acceleration(
     of the tasks above it.
 
     With N_0 = I and, for task i, JN = J_i N_i, G = JN JN' + damping I:
-    qdd += JN' G^-1 (xdd_des - jdot_v - J_i qdd) and N_{i+1} = N_i - JN' G^-1 JN. G is
-    factorised once (LAPACK potrf) and solved for [r, JN] together; N is not formed for the
-    first task (N_0 = I) nor after the last one.
+    qdd += JN' G^-1 (xdd_des - jdot_v - J_i qdd) and N_{i+1} = N_i - JN' G^-1 JN. With
+    G = L L' (LAPACK potrf) and W = L^-1 JN (explicit inverse of the k x k factor, trtri):
+    JN' G^-1 r = W' L^-1 r and JN' G^-1 JN = W'W, fewer and cheaper calls than triangular
+    solves at these sizes. N is not formed for the first task (N_0 = I) nor after the last.
     """
     last = len(tasks) - 1
     qdd = np.zeros(nv)
@@ -94,8 +97,11 @@ def prioritized_acceleration(
             r -= J.dot(qdd)
         G = JN.dot(JN.T)
         G += _scaled_identity(k, damping)
-        # G is symmetric: G.T is the column-major view LAPACK takes without a copy.
-        L, info = _potrf(G.T, lower=1, clean=0, overwrite_a=1)
+        # G is symmetric: G.T is the column-major view LAPACK takes without a copy. clean=1
+        # zeroes the upper triangle, which the triangular inverse below must not see.
+        L, info = _potrf(G.T, lower=1, clean=1, overwrite_a=1)
+        if info == 0:
+            Linv, info = _trtri(L, lower=1, overwrite_c=1)
         if info != 0:
             # Not positive definite: only with non-finite data (damping > 0). Let the
             # straightforward formula produce the same error or NaNs as before.
@@ -104,17 +110,12 @@ def prioritized_acceleration(
             if i < last:
                 N = (np.eye(nv) if N is None else N) - pinv @ JN
             continue
-        if i == last:
-            y = _potrs(L, r, lower=1)[0]
-            qdd += y.dot(JN)
-            break
-        rhs = np.empty((k, nv + 1), order="F")
-        rhs[:, 0] = r
-        rhs[:, 1:] = JN
-        Y = _potrs(L, rhs, lower=1, overwrite_b=1)[0]
-        qdd += Y[:, 0].dot(JN)
-        P = JN.T.dot(Y[:, 1:])
-        N = np.subtract(_scaled_identity(nv, 1.0) if N is None else N, P)
+        # With W = L^-1 JN: JN' G^-1 r = W' (L^-1 r) and JN' G^-1 JN = W'W.
+        W = Linv.dot(JN)
+        qdd += Linv.dot(r).dot(W)
+        if i < last:
+            P = W.T.dot(W)
+            N = np.subtract(_scaled_identity(nv, 1.0) if N is None else N, P)
     return qdd
 
 
@@ -173,18 +174,28 @@ class _Workspace:
     the constant contact rows and bounds, the wrench maps, the stacked Jacobians."""
 
     def __init__(
-        self, nc: int, nv: int, s: WbcSettings, C5: FloatArray, lo5: FloatArray, hi5: FloatArray
+        self,
+        nc: int,
+        tau_limits: FloatArray,
+        s: WbcSettings,
+        C5: FloatArray,
+        lo5: FloatArray,
+        hi5: FloatArray,
     ) -> None:
         m = 5 * nc
-        nj = nv - NV_BASE
+        nj = tau_limits.shape[0]
+        nv = nj + NV_BASE
         rows_c = C5.shape[0]
         self.C = np.zeros((nj + rows_c * nc, m))
         self.C5 = np.zeros((rows_c * nc, m))
         for i in range(nc):
             self.C5[rows_c * i : rows_c * (i + 1), 5 * i : 5 * i + 5] = C5
         self.C[nj:] = self.C5
-        self.lo_c = np.tile(lo5, nc)
-        self.hi_c = np.tile(hi5, nc)
+        # Bounds on the rows: [-tau_limits; contact lo] - shift <= C delta_w <= [tau_limits;
+        # contact hi] - shift, shift = [joint torques at delta_w = 0; C5 w5].
+        self.lo = np.concatenate([-tau_limits, np.tile(lo5, nc)])
+        self.hi = np.concatenate([tau_limits, np.tile(hi5, nc)])
+        self.shift = np.empty(self.C.shape[0])
         self.l = np.empty(self.C.shape[0])
         self.u = np.empty(self.C.shape[0])
         w = np.tile([s.weight_force] * 3 + [s.weight_moment] * 2, nc)
@@ -308,10 +319,10 @@ class WholeBodyQp:
             solve_time_s=time.perf_counter() - t1,
         )
 
-    def _workspace(self, nc: int, nv: int) -> _Workspace:
+    def _workspace(self, nc: int) -> _Workspace:
         ws = self._ws.get(nc)
-        if ws is None or ws.Jc.shape[1] != nv:
-            ws = _Workspace(nc, nv, self.settings, self._C5, self._lo5, self._hi5)
+        if ws is None:
+            ws = _Workspace(nc, self.tau_limits, self.settings, self._C5, self._lo5, self._hi5)
             self._ws[nc] = ws
         return ws
 
@@ -327,7 +338,7 @@ class WholeBodyQp:
         t0 = time.perf_counter()
         nv = M.shape[0]
         nc = len(stance)
-        ws = self._workspace(nc, nv)
+        ws = self._workspace(nc)
         T, Jc, w5 = ws.T, ws.Jc, ws.w5
         for i, c in enumerate(stance):
             cy, sy = math.cos(c.yaw), math.sin(c.yaw)
@@ -364,14 +375,14 @@ class WholeBodyQp:
         # Joint rows: tau_j = a_j - M_jb Y_0 + (M_jb K - (J'W)_j) delta_w.
         Q = M[NV_BASE:, :NV_BASE].dot(Y)
         nj = nv - NV_BASE
-        tau0 = a[NV_BASE:] - Q[:, 0]
         C = ws.C
         np.subtract(Q[:, 1:], JtW[NV_BASE:], out=C[:nj])
-        np.subtract(-self.tau_limits, tau0, out=ws.l[:nj])
-        np.subtract(self.tau_limits, tau0, out=ws.u[:nj])
-        cw = ws.C5.dot(w5)
-        np.subtract(ws.lo_c, cw, out=ws.l[nj:])
-        np.subtract(ws.hi_c, cw, out=ws.u[nj:])
+        shift = ws.shift
+        tau0 = shift[:nj]
+        np.subtract(a[NV_BASE:], Q[:, 0], out=tau0)
+        ws.C5.dot(w5, out=shift[nj:])
+        np.subtract(ws.lo, shift, out=ws.l)
+        np.subtract(ws.hi, shift, out=ws.u)
         t1 = time.perf_counter()
         sol: QpSolution = ws.qp.solve(H, g, C, ws.l, ws.u)
         if sol.status in ("max_iterations", "numerical_error"):
