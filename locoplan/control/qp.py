@@ -692,7 +692,8 @@ class LeanDenseQp:
     guesses tried plus active-set iterations. The caller guarantees the shapes (H (n, n)
     symmetric positive definite, g (n,), C (m, n), l/u (m,) with +-inf for absent bounds) and
     finite data, and decides what to do on failure (e.g. solve it through `QpSolver`). No
-    array passed in is kept.
+    array passed in is kept. `solve_x` returns only (x, status, iterations), for a control
+    loop's hot path (building the `QpSolution` costs a few microseconds).
     """
 
     def __init__(self, settings: QpSettings | None = None, guess_rounds: int = 3) -> None:
@@ -716,6 +717,38 @@ class LeanDenseQp:
     ) -> QpSolution:
         """Solve; never raises on solver failure (check ``ok``/``status``)."""
         t0 = time.perf_counter()
+        x, status, iterations, violation, z_in = self._run(H, g, C, l, u)
+        ok = status == "solved"
+        return QpSolution(
+            x=x,
+            status=status,
+            ok=ok,
+            iterations=iterations,
+            solve_time_s=time.perf_counter() - t0,
+            setup_time_s=0.0,
+            primal_residual=violation,
+            dual_residual=0.0,
+            objective=float(0.5 * x.dot(H.dot(x)) + g.dot(x)) if ok else math.nan,
+            backend="active_set",
+            reused=False,
+            active_set=True,
+            y_eq=np.zeros(0),
+            z_in=np.zeros(C.shape[0]) if z_in is None else z_in,
+            z_box=np.zeros(g.shape[0]),
+        )
+
+    def solve_x(
+        self, H: FloatArray, g: FloatArray, C: FloatArray, l: FloatArray, u: FloatArray
+    ) -> tuple[FloatArray, str, int]:
+        """`solve` for a control loop's hot path: (x, status, iterations) only, without
+        building a `QpSolution` (multipliers, objective, timings)."""
+        x, status, iterations, _, _ = self._run(H, g, C, l, u)
+        return x, status, iterations
+
+    def _run(
+        self, H: FloatArray, g: FloatArray, C: FloatArray, l: FloatArray, u: FloatArray
+    ) -> tuple[FloatArray, str, int, float, FloatArray | None]:
+        """x, status, iterations, bound violation and z_in (None: all zero)."""
         s = self.settings
         tol = s.eps_abs
         n, m = g.shape[0], C.shape[0]
@@ -723,15 +756,14 @@ class LeanDenseQp:
         factor, info = self._potrf(H.T, lower=1, clean=0, overwrite_a=0)
         if info != 0:
             self._active = {}
-            return self._solution(t0, np.full(n, math.nan), "numerical_error", 0, math.inf, m)
+            return np.full(n, math.nan), "numerical_error", 0, math.inf, None
         x_u = self._potrs(factor, g, lower=1)[0]
         np.negative(x_u, out=x_u)
         Cx = Cx_u = C.dot(x_u)
         viol = max(float((l - Cx).max(initial=0.0)), float((Cx - u).max(initial=0.0)))
         if viol <= tol:
             self._active = {}
-            objective = 0.5 * float(g.dot(x_u))  # H x_u = -g
-            return self._solution(t0, x_u, "solved", 0, viol, m, objective)
+            return x_u, "solved", 0, viol, None
         # Guesses: rows of C (int) -> True where the upper bound is active. With the guess's
         # rows as equalities C_A x = bound_A: x = x_u + V mu, V = H^-1 C_A', mu = S^-1
         # (bound_A - C_A x_u), S = C_A V, and z_A = -mu in H x + g + C' z = 0, which must be
@@ -786,8 +818,7 @@ class LeanDenseQp:
                 self._active = active
                 z_in = np.zeros(m)
                 z_in[rows] = z_a
-                objective = float(0.5 * x.dot(H.dot(x)) + g.dot(x))
-                return self._solution(t0, x, "solved", rounds, viol, m, objective, z_in)
+                return x, "solved", rounds, viol, z_in
         r = solve_dual_active_set(
             H, g, C, l, u, tol=tol, max_iter=s.active_set_iter, cholesky=factor
         )
@@ -795,40 +826,7 @@ class LeanDenseQp:
         if r.status == "solved":
             nz = np.flatnonzero(r.z_in)
             self._active = {int(j): bool(r.z_in[j] > 0.0) for j in nz}
-            objective = float(0.5 * r.x.dot(H.dot(r.x)) + g.dot(r.x))
-            return self._solution(
-                t0, r.x, "solved", iterations, r.max_violation, m, objective, r.z_in
-            )
+            return r.x, "solved", iterations, r.max_violation, r.z_in
         self._active = {}
         status = "primal_infeasible" if r.status == "infeasible" else "max_iterations"
-        return self._solution(t0, r.x, status, iterations, r.max_violation, m)
-
-    @staticmethod
-    def _solution(
-        t0: float,
-        x: FloatArray,
-        status: str,
-        iterations: int,
-        violation: float,
-        m: int,
-        objective: float = math.nan,
-        z_in: FloatArray | None = None,
-    ) -> QpSolution:
-        n = x.shape[0]
-        return QpSolution(
-            x=x,
-            status=status,
-            ok=status == "solved",
-            iterations=iterations,
-            solve_time_s=time.perf_counter() - t0,
-            setup_time_s=0.0,
-            primal_residual=violation,
-            dual_residual=0.0,
-            objective=objective,
-            backend="active_set",
-            reused=False,
-            active_set=True,
-            y_eq=np.zeros(0),
-            z_in=np.zeros(m) if z_in is None else z_in,
-            z_box=np.zeros(n),
-        )
+        return r.x, status, iterations, r.max_violation, None
