@@ -36,7 +36,7 @@ import numpy.typing as npt
 import scipy.linalg
 
 from locoplan.control.contact import ContactLimits, wrench5_to_world, wrench_rows
-from locoplan.control.qp import LeanDenseQp, QpProblem, QpSettings, QpSolution, QpSolver
+from locoplan.control.qp import LeanDenseQp, QpProblem, QpSettings, QpSolver
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -384,11 +384,11 @@ class WholeBodyQp:
         np.subtract(ws.lo, shift, out=ws.l)
         np.subtract(ws.hi, shift, out=ws.u)
         t1 = time.perf_counter()
-        sol: QpSolution = ws.qp.solve(H, g, C, ws.l, ws.u)
-        if sol.status in ("max_iterations", "numerical_error"):
+        y, status, iterations = ws.qp.solve_x(H, g, C, ws.l, ws.u)
+        if status in ("max_iterations", "numerical_error"):
             return None
-        if sol.ok:
-            y = sol.x
+        ok = status == "solved"
+        if ok:
             tau = tau0 + C[:nj].dot(y)
             delta_base = K.dot(y)
             delta_base -= Y[:, 0]
@@ -402,9 +402,9 @@ class WholeBodyQp:
             tau=tau,
             w5=w5_out,
             delta_base=delta_base,
-            ok=sol.ok,
-            status=sol.status,
-            iterations=sol.iterations,
+            ok=ok,
+            status=status,
+            iterations=iterations,
             build_time_s=t1 - t0,
             solve_time_s=time.perf_counter() - t1,
         )
