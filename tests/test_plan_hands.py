@@ -11,9 +11,12 @@ from plan_fixtures import repo_scenario, scenario_files
 from locoplan.plan import Plan, compile_plan
 from locoplan.plan.constants import (
     CARRY_FORWARD,
+    CARRY_FORWARD_RANGE,
     CARRY_HEIGHT,
+    GRASP_ABOVE_CENTRE,
     GRASP_SQUEEZE,
     HAND_DEFAULT_IN_TRUNK,
+    HAND_RADIUS,
 )
 from locoplan.scenario import load_scenario
 
@@ -97,12 +100,20 @@ def test_pick_targets_and_carry_pose() -> None:
     plan = compile_plan(repo_scenario("package-transfer"))
     pick = next(t for t in plan.tasks if t.action == "pick")
     hold = plan.holds[0]
+    # the box (0.15 m tall) is gripped GRASP_ABOVE_CENTRE above its centre, so that it hangs
+    # level from the two point contacts
+    assert hold.grip_height == GRASP_ABOVE_CENTRE
+    z_grip = 0.545 + GRASP_ABOVE_CENTRE
     # the robot turns in place at the origin, the package is at +y: approach along +y, the
-    # grasp axis along x with the left hand on the robot's left after the turn (-x side)
+    # grasp axis along x with the left hand on the robot's left after the turn (-x side);
+    # the hands close in until their spheres touch the sides, then press GRASP_SQUEEZE in
     grip = next(g for g in plan.manipulation.tracks[0].segments if g.label == "grip")
-    assert grip.start.frame == "world"
-    assert grip.start.point == pytest.approx((-(0.10 - GRASP_SQUEEZE), 0.35, 0.545), abs=1e-12)
-    # at the pick's end the hands are at the carry pose in the trunk frame
+    assert grip.start.frame == "world" and grip.end.frame == "world"
+    assert grip.start.point == pytest.approx((-(0.10 + HAND_RADIUS), 0.35, z_grip), abs=1e-12)
+    assert grip.end.point == pytest.approx((-(0.10 - GRASP_SQUEEZE), 0.35, z_grip), abs=1e-12)
+    # at the pick's end the hands are at the carry pose in the trunk frame: the box stays as
+    # far ahead as it was picked (0.35 m, within CARRY_FORWARD +- CARRY_FORWARD_RANGE) and
+    # CARRY_HEIGHT above the trunk origin
     st = plan.trunk_reference_at(pick.end)
     ht = plan.hand_targets_at(pick.end, st.position, st.yaw)
     c, s = math.cos(st.yaw), math.sin(st.yaw)
@@ -113,8 +124,9 @@ def test_pick_targets_and_carry_pose() -> None:
             ht.p_L_world[2] - st.position[2],
         ]
     )
+    assert abs(0.35 - CARRY_FORWARD) <= CARRY_FORWARD_RANGE
     assert local_l == pytest.approx(
-        [CARRY_FORWARD, hold.half_width - 0.01, CARRY_HEIGHT], abs=1e-12
+        [0.35, hold.half_width - GRASP_SQUEEZE, CARRY_HEIGHT + GRASP_ABOVE_CENTRE], abs=1e-12
     )
     assert plan.hand_active("L", pick.start + 0.01)
     assert plan.hand_active("R", 0.5 * (pick.end + plan.tasks[3].start))  # carrying

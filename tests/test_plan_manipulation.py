@@ -52,7 +52,7 @@ def test_drop_onto_conveyor_is_fully_supported_nearest_the_robot() -> None:
     assert z == pytest.approx(conveyor.size[2] + 0.075, abs=1e-12)
     # the conveyor runs along world y (yaw 90): across it (world x) the box's centre may move
     # 0.35 / 2 - margin - 0.10 from the belt's centre line; the robot is at x = 0
-    assert x == pytest.approx(0.40 - (0.175 - k.PLACE_MARGIN - 0.10), abs=1e-12)
+    assert x == pytest.approx(conveyor.position[0] - (0.175 - k.PLACE_MARGIN - 0.10), abs=1e-12)
     assert y == pytest.approx(0.0, abs=1e-12)
     # placed with its grasp axis across the robot-to-target direction: yaw -90 deg (it was
     # picked facing +y with yaw 0, so it keeps its orientation relative to the hands)
@@ -67,11 +67,15 @@ def test_object_positions_follow_the_hands_while_held() -> None:
     trunk = plan.trunk_reference(times)
     assert ref.held.tolist() == [False, True, True, False]
     assert ref.position[0] == pytest.approx(trunk.position[0])  # r_e = 0 when not held
-    assert ref.position[1] == pytest.approx([0.0, 0.35, 0.545], abs=1e-9)  # still on the table
-    # carried: centre at the carry pose in the trunk frame
+    # The reference is where the hands hold the object (the mean of the hand targets): the
+    # grip point, hold.grip_height above the box's centre (a vertical offset does not change
+    # the moment of the object's weight). At lift-off it is still on the table.
+    up = np.array([0.0, 0.0, hold.grip_height])
+    assert ref.position[1] == pytest.approx(np.array([0.0, 0.35, 0.545]) + up, abs=1e-9)
+    # carried: at the carry pose in the trunk frame (as far ahead as it was picked, 0.35 m)
     yaw = trunk.yaw[2]
     fwd = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-    expected = trunk.position[2] + k.CARRY_FORWARD * fwd + np.array([0, 0, k.CARRY_HEIGHT])
+    expected = trunk.position[2] + 0.35 * fwd + np.array([0, 0, k.CARRY_HEIGHT]) + up
     assert ref.position[2] == pytest.approx(expected, abs=1e-9)
 
 
@@ -81,12 +85,27 @@ def test_throw_target_is_the_ballistic_landing_point() -> None:
     assert target.kind == "throw"
     (hold,) = plan.holds
     st = plan.trunk_reference_at(hold.release)
-    u = np.array([1.5, 0.0, 1.0]) / math.hypot(1.5, 1.0)
-    release = (
-        st.position + np.array([k.CARRY_FORWARD, 0.0, k.CARRY_HEIGHT]) + k.THROW_RELEASE_OFFSET * u
+    # stepping in place: the trunk's planned velocity is zero, so the release state is the
+    # hands' planned one: the ball's centre between the hands, the commanded velocity
+    assert np.linalg.norm(st.velocity) == 0.0 and st.yaw_rate == 0.0
+    ht = plan.hand_targets_at(hold.release, st.position, st.yaw)
+    release = 0.5 * (np.asarray(ht.p_L_world) + np.asarray(ht.p_R_world))
+    assert 0.5 * (np.asarray(ht.v_L_world) + np.asarray(ht.v_R_world)) == pytest.approx(
+        [1.5, 0.0, 1.0], abs=1e-12
     )
     expected = ballistic_landing(tuple(release), (1.5, 0.0, 1.0), 0.10)
     assert target.position == pytest.approx(expected, abs=1e-12)
+    # the release point lies ahead of the carry pose, and the whole push stays within the arm's
+    # reach: 0.455 m from each hand's shoulder at (0, +-0.12, 0.17) in trunk (shared/robot.md)
+    assert release[0] - st.position[0] > k.CARRY_FORWARD
+    throw = next(t for t in plan.tasks if t.action == "throw")
+    for hand, y_shoulder in (("L", 0.12), ("R", -0.12)):
+        for t in np.linspace(throw.start, throw.end, 81):
+            trunk = plan.trunk_reference_at(float(t))
+            ht_t = plan.hand_targets_at(float(t), trunk.position, trunk.yaw)
+            p = np.asarray(ht_t.p_L_world if hand == "L" else ht_t.p_R_world)
+            shoulder = trunk.position + np.array([0.0, y_shoulder, 0.17])  # yaw 0 throughout
+            assert np.linalg.norm(p - shoulder) < 0.455
     # check the ballistic formula itself: the flight ends at the rest height
     t_flight = (expected[0] - release[0]) / 1.5
     assert release[2] + 1.0 * t_flight - 0.5 * 9.81 * t_flight**2 == pytest.approx(0.10, abs=1e-12)

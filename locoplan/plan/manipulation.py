@@ -23,6 +23,13 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from locoplan.plan import constants as k
+from locoplan.plan.clearance import (
+    Clearance,
+    Obstacle,
+    fixture_obstacle,
+    object_obstacle,
+    track_clearance,
+)
 from locoplan.plan.errors import PlanError
 from locoplan.plan.events import PlanEvent
 from locoplan.plan.geometry import (
@@ -36,7 +43,7 @@ from locoplan.plan.hands import HandSegment, HandTrack, HandWaypoint, Vec3, make
 from locoplan.plan.intervals import Intervals, merge_intervals
 from locoplan.plan.tasks import PlannedTask
 from locoplan.plan.trunk import TrunkPath
-from locoplan.scenario.model import Scenario
+from locoplan.scenario.model import ObjectSpec, Scenario
 
 HAND_NAMES: tuple[str, str] = ("L", "R")
 _SIDE = (1.0, -1.0)  # +y for the left hand, -y for the right
@@ -50,7 +57,8 @@ class ObjectHold:
     `grasp` (s): hand contact starts (sigma_H); `lift` (s): the object leaves its support and
     its weight acts on the robot (sigma_e); `release` (s): the hands let go (inf: held to the
     end). `hands`: "L"/"R" names. `half_width` (m): half the object's width across the grip;
-    `yaw_in_grasp` (rad): object yaw minus approach yaw at the pick.
+    `yaw_in_grasp` (rad): object yaw minus approach yaw at the pick; `grip_height` (m): how far
+    above the object's centre the hands hold it.
     """
 
     object: str
@@ -64,6 +72,7 @@ class ObjectHold:
     release_kind: Literal["drop", "throw"] | None
     half_width: float
     yaw_in_grasp: float
+    grip_height: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -116,6 +125,41 @@ def default_waypoint(hand: int) -> HandWaypoint:
     return HandWaypoint((x, _SIDE[hand] * y, z), "trunk")
 
 
+def grip_height(obj: ObjectSpec) -> float:
+    """How far above its centre (m) a box carried through a walk or turn is gripped:
+    GRASP_ABOVE_CENTRE (at most up to HAND_RADIUS + GRASP_TOP_MARGIN below its top). Two point
+    contacts leave the box free to turn about the line through them, with nothing to damp it:
+    gripped at its centre, one knock (lift-off, a step) sets it turning for good; gripped
+    above, it hangs level like a pendulum. Held standing still, the box is gripped at its
+    centre (no pendulum for the hands' own motion to excite; this keeps the 14 kg hold within
+    its thin torque margins). A sphere is always gripped at its equator."""
+    if obj.shape == "sphere":
+        return 0.0
+    top = half_extents(obj)[2] - k.HAND_RADIUS - k.GRASP_TOP_MARGIN
+    return max(0.0, min(k.GRASP_ABOVE_CENTRE, top))
+
+
+def carry_forward(
+    pose: tuple[float, float, float, float, float, float], ox: float, oy: float
+) -> float:
+    """How far ahead of the trunk (m) a picked object is carried: where it was picked, seen
+    from the planned trunk `pose` (x, y, yaw, ...) at the pick's end, within CARRY_FORWARD +-
+    CARRY_FORWARD_RANGE. Two point grips leave the object free to swing about the grip axis
+    (a pendulum with nothing to damp it), so the pick does not pull it in horizontally in a
+    hurry; the next task (drop, throw) moves it over its longer first phase."""
+    x, y, yaw = pose[0], pose[1], pose[2]
+    ahead = math.cos(yaw) * (ox - x) + math.sin(yaw) * (oy - y)
+    lo, hi = k.CARRY_FORWARD - k.CARRY_FORWARD_RANGE, k.CARRY_FORWARD + k.CARRY_FORWARD_RANGE
+    return min(max(ahead, lo), hi)
+
+
+def tuck_waypoint(hand: int, width: float) -> HandWaypoint:
+    """The tucked hand pose in trunk (HAND_TUCK_IN_TRUNK), `width` (m) off the trunk's
+    centre line."""
+    x, _, z = k.HAND_TUCK_IN_TRUNK
+    return HandWaypoint((x, _SIDE[hand] * width, z), "trunk")
+
+
 @dataclass
 class _OpenHold:
     obj: str
@@ -126,12 +170,14 @@ class _OpenHold:
     lift: float
     half_width: float
     yaw_in_grasp: float
+    grip_height: float
 
 
 @dataclass
 class _Builder:
     scenario: Scenario
     trunk: TrunkPath
+    tasks: tuple[PlannedTask, ...] = ()
     segments: tuple[list[HandSegment], list[HandSegment]] = field(default_factory=lambda: ([], []))
     contacts: tuple[list[HandContact], list[HandContact]] = field(default_factory=lambda: ([], []))
     active: tuple[list[tuple[float, float]], list[tuple[float, float]]] = field(
@@ -141,6 +187,8 @@ class _Builder:
     open_holds: dict[str, _OpenHold] = field(default_factory=dict)
     hand_holds: list[str | None] = field(default_factory=lambda: [None, None])
     state: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    # Objects placed on a moving belt: drift velocity (m/s, world xy) and since when (s).
+    drift: dict[str, tuple[tuple[float, float], float]] = field(default_factory=dict)
     targets: dict[str, ObjectTarget] = field(default_factory=dict)
     events: list[PlanEvent] = field(default_factory=list)
 
@@ -164,6 +212,97 @@ class _Builder:
                     f"still busy with task {prev.task_index} (until {prev.t1:g} s)",
                     task.index,
                 )
+
+    def carried_while_moving(self, pick: PlannedTask) -> bool:
+        """Whether the robot walks or turns while it holds what `pick` picks up (from the
+        pick's start to the first drop or throw of that object, or the end)."""
+        until = math.inf
+        for t in self.tasks:
+            if t.action in ("drop", "throw") and t.object == pick.object and t.start >= pick.start:
+                until = t.end
+                break
+        return any(
+            t.action in ("walk", "turn") and t.start < until and t.end > pick.start
+            for t in self.tasks
+        )
+
+    def free_time(self, h: int) -> float:
+        """When the hand's last planned motion ends (s); 0 before any."""
+        return self.segments[h][-1].t1 if self.segments[h] else 0.0
+
+    def obstacles(self) -> tuple[Obstacle, ...]:
+        """Fixtures and every object not held now, where the plan has put them so far."""
+        out = [fixture_obstacle(n, f) for n, f in self.scenario.fixtures.items()]
+        for name, obj in self.scenario.objects.items():
+            if name in self.open_holds:
+                continue
+            x, y, z, yaw = self.state[name]
+            drift, t_ref = self.drift.get(name, ((0.0, 0.0), 0.0))
+            out.append(object_obstacle(name, obj, (x, y, z), yaw, drift, t_ref))
+        return tuple(out)
+
+    def clearance(
+        self,
+        h: int,
+        extra: list[HandSegment],
+        t0: float,
+        t1: float,
+        obstacles: tuple[Obstacle, ...],
+        threshold: float,
+    ) -> Clearance:
+        """Clearance on [t0, t1] of the hand's track with the candidate segments appended."""
+        track = make_track(HAND_NAMES[h], default_waypoint(h), self.segments[h] + extra)
+        return track_clearance(track, self.trunk, obstacles, t0, t1, threshold)
+
+    def approach(
+        self,
+        h: int,
+        task: PlannedTask,
+        target: HandWaypoint,
+        t_end: float,
+        tuck_y: float,
+        obstacles: tuple[Obstacle, ...],
+    ) -> list[HandSegment]:
+        """Segments that bring the hand from where it is to `target` at t_end (s).
+
+        Directly (a straight blend over the task's first phase) when that keeps
+        APPROACH_CLEARANCE from every obstacle along the planned trunk path (with the yaw off
+        by as much as it may be); otherwise the hand first tucks in (close to the body and
+        `tuck_y` wide, in trunk) before the direct path would collide, waits there while the
+        trunk turns or walks, and reaches out at the earliest time from which the rest of the
+        path is clear. A hand that starts closer than APPROACH_CLEARANCE (resting beside the
+        object) only has to get no closer (within APPROACH_SLACK). If no tucked path is clear,
+        the one with the largest clearance wins.
+        """
+        i = task.index
+        cur = self.current(h)
+        t_free = self.free_time(h)
+        direct = [HandSegment(task.start, t_end, cur, target, i, "reach")]
+        start_gap = self.clearance(h, direct, t_free, t_free, obstacles, -math.inf).minimum
+        threshold = min(k.APPROACH_CLEARANCE, start_gap - k.APPROACH_SLACK)
+        c_direct = self.clearance(h, direct, t_free, t_end, obstacles, threshold)
+        if c_direct.first_below is None:
+            return direct
+        t_hit = c_direct.first_below
+        t_tuck1 = min(
+            max(t_hit - k.TUCK_LEAD, t_free + k.TUCK_DURATION), t_end - k.REACH_MIN_DURATION
+        )
+        t_tuck0 = max(t_free, t_tuck1 - k.TUCK_DURATION)
+        if t_tuck1 <= t_tuck0:
+            return direct
+        tuck = tuck_waypoint(h, tuck_y)
+        w_tuck = HandSegment(t_tuck0, t_tuck1, cur, tuck, i, "tuck")
+        best, best_gap = direct, c_direct.minimum
+        n = int((t_end - k.REACH_MIN_DURATION - t_tuck1) / k.REACH_START_STEP + 1e-9)
+        for j in range(n + 1):
+            t_r = t_tuck1 + j * k.REACH_START_STEP
+            cand = [w_tuck, HandSegment(t_r, t_end, tuck, target, i, "reach")]
+            c = self.clearance(h, cand, t_tuck0, t_end, obstacles, threshold)
+            if c.first_below is None:
+                return cand
+            if c.minimum > best_gap:
+                best, best_gap = cand, c.minimum
+        return best
 
     # --- pick ------------------------------------------------------------------------------
     def pick(self, task: PlannedTask) -> None:
@@ -190,26 +329,34 @@ class _Builder:
         ax, ay = approach_direction(rx, ry, ox, oy, ryaw)
         lx, ly = -ay, ax
         half = support_half_width(obj, oyaw, lx, ly)
+        obstacles = self.obstacles()
+        lift = grip_height(obj) if self.carried_while_moving(task) else 0.0
+        gz = oz + lift
+        forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
         for h in hands:
             side = _SIDE[h]
-            pre = _beside((ox, oy, oz), side * (half + k.GRASP_CLEARANCE), lx, ly)
-            grip = _beside((ox, oy, oz), side * (half - k.GRASP_SQUEEZE), lx, ly)
-            raised = (grip[0], grip[1], oz + k.PICK_RAISE_HEIGHT)
-            carry = (k.CARRY_FORWARD, side * (half - k.GRASP_SQUEEZE), k.CARRY_HEIGHT)
+            pre = _beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
+            touch = _beside((ox, oy, gz), side * (half + k.HAND_RADIUS), lx, ly)
+            grip = _beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
+            raised = (grip[0], grip[1], gz + k.PICK_RAISE_HEIGHT)
+            carry = (forward, side * (half - k.GRASP_SQUEEZE), k.CARRY_HEIGHT + lift)
             w_pre = HandWaypoint(pre, "world")
+            w_touch = HandWaypoint(touch, "world")
             w_grip = HandWaypoint(grip, "world")
             w_raised = HandWaypoint(raised, "world")
             w_carry = HandWaypoint(carry, "trunk")
             i = task.index
-            self.add(h, HandSegment(task.start, t_reach, self.current(h), w_pre, i, "reach"))
-            self.add(h, HandSegment(t_reach, t_contact, w_pre, w_grip, i, "squeeze"))
-            self.add(h, HandSegment(t_contact, t_lift, w_grip, w_grip, i, "grip"))
+            tuck_y = max(k.HAND_TUCK_IN_TRUNK[1], half + k.GRASP_CLEARANCE)
+            for seg in self.approach(h, task, w_pre, t_reach, tuck_y, obstacles):
+                self.add(h, seg)
+            self.add(h, HandSegment(t_reach, t_contact, w_pre, w_touch, i, "squeeze"))
+            self.add(h, HandSegment(t_contact, t_lift, w_touch, w_grip, i, "grip"))
             self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
             self.add(h, HandSegment(t_raise, task.end, w_raised, w_carry, i, "carry"))
             self.hand_holds[h] = name
-            self.active[h].append((task.start, task.end))
+            self.active[h].append((min(task.start, self.segments[h][0].t0), task.end))
         self.open_holds[name] = _OpenHold(
-            name, obj.mass, hands, task, t_contact, t_lift, half, oyaw - math.atan2(ay, ax)
+            name, obj.mass, hands, task, t_contact, t_lift, half, oyaw - math.atan2(ay, ax), lift
         )
         self.events.append(PlanEvent(t_contact, "grasp", task.index, name))
         self.events.append(PlanEvent(t_lift, "lift", task.index, name))
@@ -247,6 +394,7 @@ class _Builder:
                 kind,
                 hold.half_width,
                 hold.yaw_in_grasp,
+                hold.grip_height,
             )
         )
         for h in hold.hands:
@@ -281,22 +429,72 @@ class _Builder:
         lx, ly = -ay, ax
         half = hold.half_width
         tx, ty, tz = target
+        drift = (0.0, 0.0)
+        if task.onto is not None:
+            fixture = self.scenario.fixtures[task.onto]
+            if fixture.kind == "conveyor" and fixture.speed:
+                fyaw = math.radians(fixture.yaw)
+                drift = (fixture.speed * math.cos(fyaw), fixture.speed * math.sin(fyaw))
+        placed = object_obstacle(name, obj, target, obj_yaw, drift, t_release)
+        depth = support_half_width(obj, obj_yaw, ax, ay)
+        obstacles = (*self.obstacles(), placed)
+        i = task.index
         for h in hold.hands:
             side = _SIDE[h]
-            put = _beside(target, side * (half - k.GRASP_SQUEEZE), lx, ly)
-            hover = (put[0], put[1], tz + k.DROP_HOVER_HEIGHT)
-            opened = _beside(target, side * (half + k.GRASP_CLEARANCE), lx, ly)
+            # A belt carries the released object towards one hand: that hand opens wider by
+            # how far the object comes towards it before the drop ends.
+            towards = max(0.0, side * (drift[0] * lx + drift[1] * ly))
+            width = half + k.GRASP_CLEARANCE + towards * (task.end - t_release)
+            grip_at = (tx, ty, tz + hold.grip_height)
+            put = _beside(grip_at, side * (half - k.GRASP_SQUEEZE), lx, ly)
+            hover = (put[0], put[1], put[2] + k.DROP_HOVER_HEIGHT)
+            opened = _beside(grip_at, side * width, lx, ly)
+            back = _beside(opened, -(depth + k.GRASP_CLEARANCE), ax, ay)
             w_put = HandWaypoint(put, "world")
-            w_hover = HandWaypoint(hover, "world")
+            # The hover point moves with the trunk (where the plan has it at the hover's end):
+            # while the robot still turns or walks, a world point would pull the hands (and
+            # the load) hard against the trunk's lag; the lowering ends on the world point.
+            w_hover = HandWaypoint(_world_to_trunk(self.trunk, t_hover, hover), "trunk")
             w_open = HandWaypoint(opened, "world")
-            i = task.index
+            w_back = HandWaypoint(back, "world")
             self.add(h, HandSegment(task.start, t_hover, self.current(h), w_hover, i, "hover"))
             self.add(h, HandSegment(t_hover, t_release, w_hover, w_put, i, "lower"))
             self.add(h, HandSegment(t_release, t_open, w_put, w_open, i, "open"))
-            self.add(h, HandSegment(t_open, task.end, w_open, default_waypoint(h), i, "retract"))
+            for seg in self.retreat(h, task, t_open, w_open, w_back, obstacles):
+                self.add(h, seg)
         self._close_hold(hold, task, t_release, "drop")
         self.state[name] = (tx, ty, tz, obj_yaw)
+        if drift != (0.0, 0.0):
+            self.drift[name] = (drift, t_release)
         self.targets[name] = ObjectTarget(name, "place", target, obj_yaw, task.onto, t_release)
+
+    def retreat(
+        self,
+        h: int,
+        task: PlannedTask,
+        t0: float,
+        opened: HandWaypoint,
+        back: HandWaypoint,
+        obstacles: tuple[Obstacle, ...],
+    ) -> list[HandSegment]:
+        """Segments from the opened hand at t0 (s) to the tucked pose at the task's end (the
+        default pose could rest beside, or inside, what was just put down). Straight when that
+        keeps APPROACH_CLEARANCE, otherwise first `back` along the object's side to behind its
+        near face (world), then in; the clearer of the two if neither is clear."""
+        i = task.index
+        t1 = task.end
+        tuck = tuck_waypoint(h, k.HAND_TUCK_IN_TRUNK[1])
+        direct = [HandSegment(t0, t1, opened, tuck, i, "retract")]
+        c_direct = self.clearance(h, direct, t0, t1, obstacles, k.APPROACH_CLEARANCE)
+        if c_direct.first_below is None:
+            return direct
+        t_back = t0 + k.DROP_BACK_SHARE * (t1 - t0)
+        via = [
+            HandSegment(t0, t_back, opened, back, i, "back"),
+            HandSegment(t_back, t1, back, tuck, i, "retract"),
+        ]
+        c_via = self.clearance(h, via, t0, t1, obstacles, k.APPROACH_CLEARANCE)
+        return via if c_via.minimum > c_direct.minimum else direct
 
     # --- throw -----------------------------------------------------------------------------
     def throw(self, task: PlannedTask) -> None:
@@ -305,38 +503,69 @@ class _Builder:
         obj = self.scenario.objects[name]
         vx, vy, vz = task.velocity or (0.0, 0.0, 0.0)
         speed = math.sqrt(vx * vx + vy * vy + vz * vz)
-        ux, uy, uz = (vx / speed, vy / speed, vz / speed) if speed > 1e-9 else (1.0, 0.0, 0.0)
+        u_body = (vx / speed, vy / speed, vz / speed) if speed > 1e-9 else (1.0, 0.0, 0.0)
         t_wind = task.at_fraction(k.THROW_WINDUP_END)
+        t_cruise = task.at_fraction(k.THROW_ACCELERATE_END)
         t_release = task.at_fraction(k.THROW_RELEASE)
         t_follow = task.at_fraction(k.THROW_FOLLOW_END)
-        # 2 tau^3 - tau^4 from rest reaches the speed 2 L / T: the line is speed T / 2 long.
-        length = speed * (t_release - t_wind) / 2.0
-        length_follow = speed * (t_follow - t_release) / 2.0
-        off = k.THROW_RELEASE_OFFSET
-        vel = (vx, vy, vz)
-        direction = (ux, uy, uz)
+        # The line is laid out in the world from the planned trunk pose at the release, so that
+        # the hands' world velocity there is the commanded one whatever the trunk does (it
+        # recoils as the load is pushed). From the rest at the wind-up point the quintic
+        # reaches the speed v after v T / 2 (accelerate), holds it for v T (cruise: the hands'
+        # tracking catches up) and comes back to rest after v T / 2 (follow-through).
+        bx, by, byaw, bvx, bvy, bwz = self.trunk.pose_at(t_release)
+        c, s = math.cos(byaw), math.sin(byaw)
+        bz = self.trunk.height
+
+        def to_world(q: Vec3) -> Vec3:
+            return (bx + c * q[0] - s * q[1], by + s * q[0] + c * q[1], bz + q[2])
+
+        u = (c * u_body[0] - s * u_body[1], s * u_body[0] + c * u_body[1], u_body[2])
+        lat = (-s, c, 0.0)  # the trunk's left, world
+        centre_stop = to_world(
+            _along((k.CARRY_FORWARD, 0.0, k.CARRY_HEIGHT), k.THROW_STOP_OFFSET, u_body)
+        )
+        v_cmd = speed * k.THROW_SPEED_GAIN
+        length_follow = v_cmd * (t_follow - t_release) / 2.0
+        length_cruise = v_cmd * (t_release - t_cruise)
+        length_acc = v_cmd * (t_cruise - t_wind) / 2.0
+        centre_rel = _along(centre_stop, -length_follow, u)
+        centre_cruise = _along(centre_rel, -length_cruise, u)
+        centre_wind = _along(centre_cruise, -length_acc, u)
+        vel = (u[0] * v_cmd, u[1] * v_cmd, u[2] * v_cmd)
+        half = hold.half_width
+        up = (0.0, 0.0, 1.0)
+        centre_wind, centre_cruise, centre_rel, centre_stop = (
+            _along(q, hold.grip_height, up)
+            for q in (centre_wind, centre_cruise, centre_rel, centre_stop)
+        )
+        i = task.index
         for h in hold.hands:
             side = _SIDE[h]
-            carry = (k.CARRY_FORWARD, side * (hold.half_width - k.GRASP_SQUEEZE), k.CARRY_HEIGHT)
-            rel = _along(carry, off, direction)
-            wind = _along(rel, -length, direction)
-            stop = _along(rel, length_follow, direction)
-            w_wind = HandWaypoint(wind, "trunk")
-            w_rel = HandWaypoint(rel, "trunk", vel)
-            w_stop = HandWaypoint(stop, "trunk")
-            i = task.index
+            grip = side * (half - k.GRASP_SQUEEZE)
+            loose = side * (half + k.HAND_RADIUS)
+            opened = side * (half + k.GRASP_CLEARANCE)
+            w_wind = HandWaypoint(_along(centre_wind, grip, lat), "world")
+            w_cruise = HandWaypoint(_along(centre_cruise, grip, lat), "world", vel)
+            # No squeeze at the release: the hands only touch the object, so nothing drags it
+            # once the grasp lets go.
+            w_rel = HandWaypoint(_along(centre_rel, loose, lat), "world", vel)
+            w_stop = HandWaypoint(_along(centre_stop, opened, lat), "world")
             self.add(h, HandSegment(task.start, t_wind, self.current(h), w_wind, i, "windup"))
-            self.add(h, HandSegment(t_wind, t_release, w_wind, w_rel, i, "accelerate"))
+            self.add(h, HandSegment(t_wind, t_cruise, w_wind, w_cruise, i, "accelerate"))
+            self.add(h, HandSegment(t_cruise, t_release, w_cruise, w_rel, i, "cruise"))
             self.add(h, HandSegment(t_release, t_follow, w_rel, w_stop, i, "follow"))
             self.add(h, HandSegment(t_follow, task.end, w_stop, default_waypoint(h), i, "return"))
         self._close_hold(hold, task, t_release, "throw")
-        # Planned release state of the object's centre, for its landing point.
-        bx, by, byaw, bvx, bvy, bwz = self.trunk.pose_at(t_release)
-        c, s = math.cos(byaw), math.sin(byaw)
-        r = (k.CARRY_FORWARD + off * ux, off * uy, k.CARRY_HEIGHT + off * uz)
-        rwx, rwy = c * r[0] - s * r[1], s * r[0] + c * r[1]
-        p = (bx + rwx, by + rwy, self.trunk.height + r[2])
-        v = (c * vx - s * vy + bvx - bwz * rwy, s * vx + c * vy + bvy + bwz * rwx, vz)
+        # Planned release state of the object's centre: the line's release point and the
+        # commanded velocity relative to the planned trunk motion, for its landing point.
+        p = _along(centre_rel, -hold.grip_height, up)
+        rwx, rwy = p[0] - bx, p[1] - by
+        v = (
+            c * vx - s * vy + bvx - bwz * rwy,
+            s * vx + c * vy + bvy + bwz * rwx,
+            vz,
+        )
         landing = ballistic_landing(p, v, half_extents(obj)[2])
         self.state[name] = (*landing, self.state[name][3])
         self.targets[name] = ObjectTarget(name, "throw", landing, None, None, t_release)
@@ -356,6 +585,7 @@ class _Builder:
                     None,
                     hold.half_width,
                     hold.yaw_in_grasp,
+                    hold.grip_height,
                 )
             )
             for h in hold.hands:
@@ -399,6 +629,14 @@ def _beside(p: Vec3, d: float, lx: float, ly: float) -> Vec3:
     return (p[0] + d * lx, p[1] + d * ly, p[2])
 
 
+def _world_to_trunk(trunk: TrunkPath, t: float, p: Vec3) -> Vec3:
+    """The world point p (m) in the planned trunk frame at t (s)."""
+    x, y, yaw, *_ = trunk.pose_at(t)
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy = p[0] - x, p[1] - y
+    return (c * dx + s * dy, -s * dx + c * dy, p[2] - trunk.height)
+
+
 def _along(p: Vec3, d: float, u: Vec3) -> Vec3:
     """p moved by d along the unit vector u."""
     return (p[0] + d * u[0], p[1] + d * u[1], p[2] + d * u[2])
@@ -408,7 +646,7 @@ def build_manipulation(
     tasks: tuple[PlannedTask, ...], scenario: Scenario, trunk: TrunkPath
 ) -> ManipulationPlan:
     """Hand tracks, contacts, object holds and targets for the sorted planned tasks."""
-    b = _Builder(scenario, trunk)
+    b = _Builder(scenario, trunk, tasks)
     for task in tasks:
         if task.action == "pick":
             b.pick(task)

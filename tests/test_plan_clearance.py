@@ -1,0 +1,154 @@
+"""Hand clearance (locoplan.plan.clearance) and the collision-free hand paths it plans."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from plan_fixtures import repo_scenario
+
+from locoplan.plan import compile_plan
+from locoplan.plan import constants as k
+from locoplan.plan.clearance import (
+    Obstacle,
+    base_pose,
+    fixture_obstacle,
+    object_obstacle,
+    track_clearance,
+)
+from locoplan.plan.hands import HandSegment, HandWaypoint, make_track
+from locoplan.plan.manipulation import default_waypoint
+
+EXACT = 1e-12  # closed-form distances, float rounding only
+
+
+def test_box_distance_outside_inside_and_yawed() -> None:
+    box = Obstacle("box", (1.0, 0.0, 0.5), (0.2, 0.1, 0.05))
+    assert box.distance((1.5, 0.0, 0.5), 0.0) == pytest.approx(0.3, abs=EXACT)  # face
+    assert box.distance((1.5, 0.4, 0.5), 0.0) == pytest.approx(math.sqrt(0.18), abs=EXACT)
+    assert box.distance((1.0, 0.0, 0.5), 0.0) == pytest.approx(-0.05, abs=EXACT)  # centre
+    yawed = Obstacle("yawed", (0.0, 0.0, 0.0), (0.2, 0.1, 0.1), math.pi / 2)
+    assert yawed.distance((0.0, 0.5, 0.0), 0.0) == pytest.approx(0.3, abs=EXACT)
+    assert yawed.distance((0.5, 0.0, 0.0), 0.0) == pytest.approx(0.4, abs=EXACT)
+
+
+def test_sphere_and_drifting_obstacles() -> None:
+    ball = Obstacle("ball", (0.0, 0.0, 0.1), (0.1, 0.1, 0.1), sphere=True)
+    assert ball.distance((0.3, 0.0, 0.1), 0.0) == pytest.approx(0.2, abs=EXACT)
+    belt = Obstacle("belt", (0.0, 0.0, 0.0), (0.1, 0.1, 0.1), drift=(0.0, 0.2), t_ref=1.0)
+    # before t_ref it has not moved; 0.5 s later it is 0.1 m further along +y
+    assert belt.distance((0.0, 0.5, 0.0), 0.5) == pytest.approx(0.4, abs=EXACT)
+    assert belt.distance((0.0, 0.5, 0.0), 1.5) == pytest.approx(0.3, abs=EXACT)
+
+
+def test_fixture_is_a_box_from_the_floor() -> None:
+    table = repo_scenario("package-transfer").fixtures["table"]
+    ob = fixture_obstacle("table", table)
+    top = table.size[2]
+    assert ob.distance((table.position[0], table.position[1], top + 0.1), 0.0) == pytest.approx(
+        0.1, abs=EXACT
+    )
+    assert ob.distance((table.position[0], table.position[1], 0.05), 0.0) < 0.0
+
+
+def test_a_track_through_an_object_has_negative_clearance() -> None:
+    plan = compile_plan(repo_scenario("throw"))
+    obj = repo_scenario("throw").objects["ball"]
+    ball = object_obstacle("ball", obj, (0.35, 0.0, 0.52), 0.0)
+    # the left hand straight through the ball's centre (world), from well outside
+    start = HandWaypoint((0.35, 0.4, 0.52), "world")
+    end = HandWaypoint((0.35, -0.4, 0.52), "world")
+    track = make_track("L", default_waypoint(0), [HandSegment(0.0, 1.0, start, end, 0, "x")])
+    c = track_clearance(track, plan.trunk, (ball,), 0.0, 1.0, 0.0)
+    assert c.minimum == pytest.approx(-0.1 - k.HAND_RADIUS, abs=2e-3)  # 10 ms sampling
+    assert c.obstacle == "object:ball" and c.first_below is not None
+    # at t = 0 it is 0.3 m from the surface, minus the hand sphere
+    c0 = track_clearance(track, plan.trunk, (ball,), 0.0, 0.0, 0.0)
+    assert c0.minimum == pytest.approx(0.3 - k.HAND_RADIUS, abs=EXACT)
+
+
+def test_yaw_offsets_swing_trunk_waypoints_only() -> None:
+    plan = compile_plan(repo_scenario("package-transfer"))
+    a = base_pose(plan.trunk, 1.0)
+    b = base_pose(plan.trunk, 1.0, 0.1)
+    assert math.atan2(b.s, b.c) - math.atan2(a.s, a.c) == pytest.approx(0.1, abs=EXACT)
+    fixed = HandWaypoint((0.3, 0.2, 0.5), "world")
+    track = make_track("L", fixed, [])
+    assert track.evaluate(1.0, a)[0] == track.evaluate(1.0, b)[0]
+    moving = make_track("L", default_waypoint(0), [])
+    assert moving.evaluate(1.0, a)[0] != moving.evaluate(1.0, b)[0]
+
+
+def _phases_clear(
+    name: str, strategy: str | None, labels: set[str], check_rest: bool = True
+) -> None:
+    """Every hand keeps APPROACH_CLEARANCE (less 1 cm for the 10 ms sampling of a path that
+    grazes an edge) from every object and fixture during the segments named in `labels` and
+    while it rests between segments before the first grasp, along the planned trunk path with
+    the yaw off as the trunk may be."""
+    scenario = repo_scenario(name)
+    plan = compile_plan(scenario, strategy)
+    hold = plan.holds[0]
+    obj = scenario.objects[hold.object]
+    before = object_obstacle(hold.object, obj, tuple(obj.position), math.radians(obj.yaw))
+    target = plan.object_target(hold.object)
+    assert target.position is not None and target.yaw is not None and target.time is not None
+    after = object_obstacle(hold.object, obj, target.position, target.yaw, t_ref=target.time)
+    fixtures = tuple(fixture_obstacle(n, f) for n, f in scenario.fixtures.items())
+    for track in plan.manipulation.tracks:
+        for g in track.segments:
+            if g.label not in labels:
+                continue
+            ob = (before,) if g.t1 <= hold.grasp else (after,)
+            c = track_clearance(track, plan.trunk, ob + fixtures, g.t0, g.t1, 0.0)
+            assert c.minimum >= k.APPROACH_CLEARANCE - 0.01, (track.hand, g.label, c)
+        if not check_rest:
+            continue
+        # resting at the default pose or tucked until the approach: clear as well
+        c = track_clearance(track, plan.trunk, (before, *fixtures), 0.0, hold.grasp - 0.2, 0.0)
+        assert c.minimum >= k.APPROACH_CLEARANCE - 0.01, (track.hand, "before the grasp", c)
+
+
+@pytest.mark.parametrize("strategy", ["dynamic", "quasi-static"])
+def test_package_transfer_hands_clear_the_package_and_table(strategy: str) -> None:
+    _phases_clear("package-transfer", strategy, {"tuck", "reach", "retract", "back"})
+
+
+def test_pick_walk_drop_retreat_clears_the_placed_box() -> None:
+    # (its default hand pose already rests beside the box, 2 cm off its sides: only the
+    # retreat from the placed box is checked)
+    _phases_clear("pick-walk-drop", None, {"retract", "back"}, check_rest=False)
+
+
+def test_the_default_pose_would_sweep_into_the_package() -> None:
+    # Why the left hand tucks in: held at the default pose through the first turn it would
+    # pass through the package (the failure the tuck fixes).
+    scenario = repo_scenario("package-transfer")
+    plan = compile_plan(scenario)
+    obj = scenario.objects["package"]
+    package = object_obstacle("package", obj, tuple(obj.position), 0.0)
+    idle = make_track("L", default_waypoint(0), [])
+    c = track_clearance(idle, plan.trunk, (package,), 0.0, 1.6, 0.0, yaw_offsets=(0.0,))
+    assert c.minimum < 0.0
+    tuck = next(g for g in plan.manipulation.tracks[0].segments if g.label == "tuck")
+    assert tuck.t1 < c.time  # tucked in before the default pose would have hit it
+
+
+def test_drop_on_a_belt_opens_the_downstream_hand_wider() -> None:
+    plan = compile_plan(repo_scenario("package-transfer"))
+    (hold,) = plan.holds
+    opened = [
+        next(g for g in tr.segments if g.label == "open").end.point
+        for tr in plan.manipulation.tracks
+    ]
+    target = plan.object_target("package").position
+    assert target is not None
+    # the belt runs along +y (world), the left hand is on the +y side after the turn back
+    gap_left = opened[0][1] - target[1] - hold.half_width
+    gap_right = target[1] - opened[1][1] - hold.half_width
+    assert gap_right == pytest.approx(k.GRASP_CLEARANCE, abs=EXACT)
+    drop = next(t for t in plan.tasks if t.action == "drop")
+    extra = 0.2 * (drop.end - hold.release)  # belt speed x time from the release to the end
+    assert gap_left == pytest.approx(k.GRASP_CLEARANCE + extra, abs=EXACT)
+    assert np.isfinite(gap_left)
