@@ -1,33 +1,66 @@
-"""piqp vs proxsuite (and the dual active-set path) on the MPC QP and on a WBC-like dense QP.
+"""QP backends on the MPC QP and on a WBC-like dense QP: daqp, proxsuite, piqp, and for
+reference quadprog and the hand-written dual active-set method (the MPC's default before
+daqp), when installed.
 
 Run: OMP_NUM_THREADS=1 .venv/bin/python benchmarks/qp_backends.py [--n 300]
 
 1. The MPC QP (horizon 20, condensed, foot-frame wrenches): the problems met in the closed
-   loops of benchmarks/mpc_qp.py (standing and stepping, state noise level 1), solved in
-   order by one QpSolver per configuration, so re-use of the solver object counts.
+   loops of benchmarks/mpc_qp.py (standing, stepping, standing with 5 kg held; state noise
+   level 1), solved in order by one solver per configuration, so re-use of the solver object
+   and warm starts count. "least-distance form" is the MPC's path: the form is computed by
+   the MPC from its cached factor blocks, and that computation is included in the time.
 2. A dense QP like the whole-body QP: 38 variables, random SPD H, 6 equalities, 30
    two-sided inequalities, a box; consecutive problems differ by a small random change, as
    ticks of a control loop do.
 
-Times in microseconds (wall time of QpSolver.solve: scaling, setup/update and solve),
-median / p99, and the largest difference from a piqp reference at eps 1e-10.
+Times in microseconds (wall time: for QpSolver the whole solve call -- scaling,
+setup/update and solve), median / p99, iterations median / max, the largest difference from
+a piqp reference at eps 1e-10, and failures. "warm": the previous solution's active set (or
+proxsuite's previous iterate) when the problem has the same rows.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
-from dataclasses import replace
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from locoplan.control.mpc import MpcSettings, MultiContactMpc
-from locoplan.control.qp import QpProblem, QpSettings, QpSolver
+from locoplan.control.mpc import MpcInput, MpcSettings, MultiContactMpc
+from locoplan.control.qp import (
+    QpProblem,
+    QpSettings,
+    QpSolver,
+    active_constraint_ids,
+)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import mpc_qp
+
+try:  # optional reference: Goldfarb-Idnani in Fortran (pip install quadprog)
+    import quadprog
+except ImportError:  # pragma: no cover - optional
+    quadprog = None
+try:  # the hand-written method, while the module exists (LeanDenseQp's fallback)
+    from locoplan.control.qp_active_set import solve_dual_active_set
+except ImportError:  # pragma: no cover - optional
+    solve_dual_active_set = None
+
+
+@dataclass
+class Case:
+    """One solve: time (s), iterations, x (None on failure)."""
+
+    time_s: float
+    iterations: int
+    x: np.ndarray | None
 
 
 def wbc_like_problems(count: int, seed: int = 0) -> list[QpProblem]:
@@ -63,67 +96,148 @@ def wbc_like_problems(count: int, seed: int = 0) -> list[QpProblem]:
     return out
 
 
-def mpc_problems(count: int) -> dict[str, list[QpProblem]]:
-    """The condensed MPC QPs met in the benchmark closed loops."""
-    out = {}
-    for name, schedule in (
-        ("standing", mpc_qp.standing_contact),
-        ("stepping", mpc_qp.stepping_contact),
-    ):
-        mpc = MultiContactMpc(MpcSettings())
-        inputs = mpc_qp.record_inputs(schedule, count)
-        out[name] = [mpc.build_qp(inp) for inp in inputs]
+def mpc_inputs(count: int) -> dict[str, list[MpcInput]]:
+    """The MPC inputs met in the benchmark closed loops."""
+    return {
+        "standing": mpc_qp.record_inputs(mpc_qp.standing_contact, count),
+        "stepping": mpc_qp.record_inputs(mpc_qp.stepping_contact, count),
+        "stand+5kg": mpc_qp.record_inputs(mpc_qp.standing_contact, count, object_mass=5.0),
+    }
+
+
+def qp_solver_runner(backend: str, settings: QpSettings) -> Callable[[list[QpProblem]], list[Case]]:
+    def run(problems: list[QpProblem]) -> list[Case]:
+        solver = QpSolver(backend, settings)
+        solver.solve(problems[0])
+        out = []
+        for p in problems:
+            sol = solver.solve(p)
+            out.append(Case(sol.solve_time_s, sol.iterations, sol.x if sol.ok else None))
+        return out
+
+    return run
+
+
+def least_distance_runner(
+    inputs: list[MpcInput], warm: bool
+) -> Callable[[list[QpProblem]], list[Case]]:
+    """daqp on the MPC's least-distance form; the form's computation is timed too."""
+
+    def run(problems: list[QpProblem]) -> list[Case]:
+        base = MpcSettings()
+        mpc = MultiContactMpc(replace(base, qp=replace(base.qp, warm_start=warm)))
+        solver = QpSolver("daqp", mpc.settings.qp)
+        out = []
+        prev = None
+        for p, inp in zip(problems, inputs, strict=True):
+            n0 = int(np.count_nonzero(inp.contact[0])) * 5
+            t0 = time.perf_counter()
+            form = mpc._least_distance(p, n0)  # the MPC's own computation (private on purpose)
+            hint = active_constraint_ids(prev) if warm and prev is not None else None
+            if hint is not None and prev is not None and prev.x.shape[0] != p.n:
+                hint = None
+            sol = solver.solve(p, active_hint=hint, least_distance=form)
+            out.append(Case(time.perf_counter() - t0, sol.iterations, sol.x if sol.ok else None))
+            prev = sol if sol.ok else None
+        return out
+
+    return run
+
+
+def active_set_runner(warm: bool) -> Callable[[list[QpProblem]], list[Case]]:
+    """The hand-written dual active-set method (its own Cholesky factorisation)."""
+
+    def run(problems: list[QpProblem]) -> list[Case]:
+        assert solve_dual_active_set is not None
+        out = []
+        prev: Any = None
+        for p in problems:
+            hint = None
+            if warm and prev is not None and prev.x.shape[0] == p.n:
+                z = np.concatenate([prev.z_in, prev.z_box])
+                nz = np.flatnonzero(z)
+                hint = np.where(z[nz] > 0, p.n_in + p.n + nz, nz)
+            t0 = time.perf_counter()
+            r = solve_dual_active_set(
+                p.H, p.g, p.C, p.l, p.u, p.x_lower, p.x_upper, 1e-6, 100, initial_active=hint
+            )
+            ok = r.status == "solved"
+            out.append(Case(time.perf_counter() - t0, r.iterations, r.x if ok else None))
+            prev = r if ok else None
+        return out
+
+    return run
+
+
+def quadprog_runner(problems: list[QpProblem]) -> list[Case]:
+    """quadprog.solve_qp (cold; it has no warm start): min 1/2 x'Gx - a'x s.t. C'x >= b, the
+    one-sided rows built in the timed call."""
+    out = []
+    for p in problems:
+        t0 = time.perf_counter()
+        I = np.eye(p.n)
+        rows, rhs = [], []
+        lo = p.x_lower if p.x_lower is not None else np.full(p.n, -np.inf)
+        hi = p.x_upper if p.x_upper is not None else np.full(p.n, np.inf)
+        for M, lower, upper in ((I, lo, hi), (p.C, p.l, p.u)):
+            if M is None:
+                continue
+            lower = lower if lower is not None else np.full(M.shape[0], -np.inf)
+            upper = upper if upper is not None else np.full(M.shape[0], np.inf)
+            fl, fu = np.isfinite(lower), np.isfinite(upper)
+            rows += [M[fl], -M[fu]]
+            rhs += [lower[fl], -upper[fu]]
+        meq = 0
+        if p.A is not None:
+            rows.insert(0, p.A)
+            rhs.insert(0, p.b)
+            meq = p.A.shape[0]
+        Cq = np.vstack(rows).T.copy()
+        try:
+            r = quadprog.solve_qp(p.H, -p.g, Cq, np.concatenate(rhs), meq)
+            case = Case(time.perf_counter() - t0, int(r[3][0]), r[0])
+        except ValueError:  # quadprog raises on infeasible or non-convex problems
+            case = Case(time.perf_counter() - t0, 0, None)
+        out.append(case)
     return out
 
 
-def configurations(mpc: bool) -> list[tuple[str, str, QpSettings]]:
+def configurations(
+    inputs: list[MpcInput] | None,
+) -> list[tuple[str, Callable[[list[QpProblem]], list[Case]]]]:
     base = QpSettings(
-        eps_abs=1e-6, eps_gap_abs=1e-6, max_iter=50, max_iter_in=10, eps_primal_inf=1e-9
+        eps_abs=1e-6, eps_gap_abs=1e-6, max_iter=100, max_iter_in=10, eps_primal_inf=1e-9
     )
     scaled = replace(base, scaling=True, preconditioner=False)
-    out = [
-        ("proxsuite, own preconditioner", "proxsuite", base),
-        ("proxsuite, Jacobi scaling", "proxsuite", scaled),
-        ("proxsuite, Jacobi scaling, warm", "proxsuite", replace(scaled, warm_start=True)),
-        ("piqp, own preconditioner", "piqp", base),
-        ("piqp, Jacobi scaling", "piqp", scaled),
+    out: list[tuple[str, Callable[[list[QpProblem]], list[Case]]]] = []
+    if inputs is not None:
+        out += [
+            ("daqp, least-distance form (MPC default)", least_distance_runner(inputs, False)),
+            ("daqp, least-distance form, warm", least_distance_runner(inputs, True)),
+        ]
+    out += [
+        ("daqp, its own transformation", qp_solver_runner("daqp", base)),
+        (
+            "daqp, its own transformation, warm",
+            qp_solver_runner("daqp", replace(base, warm_start=True)),
+        ),
+        ("proxsuite, own preconditioner", qp_solver_runner("proxsuite", base)),
+        ("proxsuite, Jacobi scaling", qp_solver_runner("proxsuite", scaled)),
+        (
+            "proxsuite, Jacobi scaling, warm",
+            qp_solver_runner("proxsuite", replace(scaled, warm_start=True)),
+        ),
+        ("piqp, own preconditioner", qp_solver_runner("piqp", base)),
+        ("piqp, Jacobi scaling", qp_solver_runner("piqp", scaled)),
     ]
-    if mpc:
-        out.insert(
-            0,
-            (
-                "active set, then proxsuite (MPC default)",
-                "proxsuite",
-                replace(scaled, active_set_iter=50),
-            ),
-        )
+    if quadprog is not None:
+        out.append(("quadprog (cold)", quadprog_runner))
+    if solve_dual_active_set is not None and inputs is not None:
+        out += [
+            ("hand-written active set, cold", active_set_runner(False)),
+            ("hand-written active set, warm", active_set_runner(True)),
+        ]
     return out
-
-
-def run(problems: list[QpProblem], backend: str, settings: QpSettings) -> dict[str, float]:
-    ref_settings = QpSettings(eps_abs=1e-10, eps_gap_abs=1e-10, scaling=True, max_iter=300)
-    refs = [QpSolver("piqp", ref_settings).solve(p).x for p in problems]
-    solver = QpSolver(backend, settings)
-    solver.solve(problems[0])
-    times, iters, err = [], [], 0.0
-    fails = 0
-    for p, ref in zip(problems, refs, strict=True):
-        sol = solver.solve(p)
-        times.append(sol.solve_time_s * 1e6)
-        iters.append(sol.iterations)
-        if sol.ok:
-            err = max(err, float(np.max(np.abs(sol.x - ref))))
-        else:
-            fails += 1
-    t = np.array(times)
-    return {
-        "median": float(np.median(t)),
-        "p99": float(np.percentile(t, 99)),
-        "iters": float(np.median(iters)),
-        "max_iters": float(np.max(iters)),
-        "err": err,
-        "fails": fails,
-    }
 
 
 def main() -> None:
@@ -132,21 +246,33 @@ def main() -> None:
     args = ap.parse_args()
     if os.environ.get("OMP_NUM_THREADS") != "1":
         print("warning: set OMP_NUM_THREADS=1 for single-core figures")
-    sets: dict[str, tuple[list[QpProblem], bool]] = {
-        f"MPC {k}": (v, True) for k, v in mpc_problems(args.n).items()
-    }
-    sets["WBC-like 38 vars"] = (wbc_like_problems(args.n), False)
+    sets: dict[str, tuple[list[QpProblem], list[MpcInput] | None]] = {}
+    for name, inputs in mpc_inputs(args.n).items():
+        mpc = MultiContactMpc()
+        sets[f"MPC {name}"] = ([mpc.build_qp(inp) for inp in inputs], inputs)
+    sets["WBC-like 38 vars"] = (wbc_like_problems(args.n), None)
+    ref_settings = QpSettings(eps_abs=1e-10, eps_gap_abs=1e-10, scaling=True, max_iter=300)
     print(
         f"{'problem':18s} {'configuration':42s} {'median':>7s} {'p99':>7s}  iters  max|dx|  fails"
     )
-    for set_name, (problems, is_mpc) in sets.items():
+    for set_name, (problems, inputs) in sets.items():
         p0 = problems[0]
         print(f"-- {set_name}: n {p0.n}, n_eq {p0.n_eq}, n_in {p0.n_in}, box {p0.has_box}")
-        for name, backend, settings in configurations(is_mpc):
-            r = run(problems, backend, settings)
+        refs = [QpSolver("piqp", ref_settings).solve(p).x for p in problems]
+        for name, runner in configurations(inputs):
+            cases = runner(problems)
+            t = np.array([c.time_s for c in cases]) * 1e6
+            iters = [c.iterations for c in cases]
+            errs = [
+                float(np.max(np.abs(c.x - ref)))
+                for c, ref in zip(cases, refs, strict=True)
+                if c.x is not None
+            ]
+            fails = sum(c.x is None for c in cases)
+            err = max(errs) if errs else math.nan
             print(
-                f"{set_name:18s} {name:42s} {r['median']:7.0f} {r['p99']:7.0f}"
-                f"  {r['iters']:3.0f}/{r['max_iters']:3.0f}  {r['err']:9.1e}  {r['fails']:5d}"
+                f"{set_name:18s} {name:42s} {np.median(t):7.0f} {np.percentile(t, 99):7.0f}"
+                f"  {np.median(iters):3.0f}/{max(iters):3d}  {err:9.1e}  {fails:5d}"
             )
 
 

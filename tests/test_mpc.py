@@ -10,7 +10,7 @@ import pytest
 
 from locoplan.control import srbd
 from locoplan.control.mpc import MpcInput, MpcSettings, MultiContactMpc
-from locoplan.control.qp import QpSettings
+from locoplan.control.qp import BACKENDS, QpSettings
 from locoplan.exceptions import SolverFailure
 
 N = 20
@@ -200,7 +200,7 @@ def test_swing_feet_have_exactly_zero_wrench() -> None:
     assert np.all(sol.forces_world[swing0] == 0.0) and np.all(sol.moments_world[swing0] == 0.0)
 
 
-@pytest.mark.parametrize("backend", ["proxsuite", "piqp"])
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_bounds_hold_on_every_step_under_a_push(backend: str) -> None:
     s = MpcSettings(backend=backend, mu_torsion=0.02)
     inp = make_input(contact=stepping_contact(), v0=(0.6, -0.4, 0.0), yaw_rate=0.5)
@@ -235,18 +235,16 @@ def test_bounds_hold_on_every_step_under_a_push(backend: str) -> None:
     ],
 )
 def test_formulations_and_backends_agree(inp: MpcInput) -> None:
+    # daqp on the condensed form takes the MPC's least-distance form; on the sparse form it
+    # gets the plain (densified) problem.
     results = {}
     for formulation in ("condensed", "sparse"):
-        for backend in ("proxsuite", "piqp"):
-            for active_set_iter in (0, 50):
-                if formulation == "sparse" and active_set_iter:
-                    continue  # the active-set path is dense-only
-                qp = replace(TIGHT, active_set_iter=active_set_iter)
-                s = MpcSettings(formulation=formulation, backend=backend, qp=qp)
-                sol = MultiContactMpc(s).update(inp)
-                assert sol.ok, (formulation, backend, sol.status)
-                results[(formulation, backend, active_set_iter)] = sol.U
-    ref = results[("condensed", "piqp", 0)]
+        for backend in BACKENDS:
+            s = MpcSettings(formulation=formulation, backend=backend, qp=TIGHT)
+            sol = MultiContactMpc(s).update(inp)
+            assert sol.ok, (formulation, backend, sol.status)
+            results[(formulation, backend)] = sol.U
+    ref = results[("condensed", "piqp")]
     for key, U in results.items():
         # 1e-5 relative on the whole horizon: the QP is ill-conditioned (R = 1e-4 against
         # state weights up to 2000, cond(H) ~ 1e7), so at eps 1e-10 the solutions agree to
@@ -268,11 +266,11 @@ def test_infeasible_settings_fail_cleanly() -> None:
 
 
 def test_shifted_fallback_and_final_failure() -> None:
-    # Backend capped at one iteration and an active set capped at one: the first (rest)
-    # problem needs no active constraint and solves; the pushed one cannot, nor can its
-    # relaxed retry, so the previous solution is shifted by one step.
-    qp = QpSettings(max_iter=1, active_set_iter=1, scaling=True, preconditioner=False)
-    s = MpcSettings(backend="piqp", qp=qp, relaxed_qp=qp)
+    # daqp capped at one iteration: the first (rest) problem needs no active constraint (its
+    # unconstrained minimiser meets every bound) and solves; the pushed one cannot, nor can
+    # its relaxed retry, so the previous solution is shifted by one step.
+    qp = QpSettings(max_iter=1)
+    s = MpcSettings(backend="daqp", qp=qp, relaxed_qp=qp)
     mpc = MultiContactMpc(s)
     first = mpc.update(make_input())  # t = 0
     assert first.ok
@@ -297,17 +295,35 @@ def test_input_validation() -> None:
         MpcSettings(dt=0.0)
 
 
-def test_consecutive_updates_match_fresh_solves() -> None:
-    # The second and later updates start the active-set method from the previous active set
-    # (shifted by the elapsed steps); the optimum must not depend on that start.
-    mpc = MultiContactMpc()
+@pytest.mark.parametrize("warm_start", [False, True])
+def test_consecutive_updates_match_fresh_solves(warm_start: bool) -> None:
+    # Later updates re-use the cached factor blocks and, with warm_start, start daqp from
+    # the previous active set (shifted by the elapsed steps); the optimum must not depend on
+    # either.
+    s = MpcSettings()
+    mpc = MultiContactMpc(replace(s, qp=replace(s.qp, warm_start=warm_start)))
     contact = stepping_contact()
     for i, v in enumerate([(0.3, -0.3, 0.0), (0.35, -0.25, 0.0), (0.2, -0.3, 0.1)]):
         inp = replace(make_input(contact=contact, v0=v), t=0.03 * i)
         warm = mpc.update(inp)
         fresh = MultiContactMpc().update(inp)
         assert warm.ok and fresh.ok
+        assert warm.iterations > 0  # the push makes bounds active: daqp ran
         # Both solve to eps_abs = 1e-6 on the bounds and are exact otherwise; the QP is
         # ill-conditioned (cond ~1e7), so 1e-5 relative on U.
         rel = np.linalg.norm(warm.U - fresh.U) / np.linalg.norm(fresh.U)
         assert rel < 1e-5
+
+
+@pytest.mark.parametrize("stance_at_0", [False, True])
+def test_least_distance_edge_schedules(stance_at_0: bool) -> None:
+    # The least-distance form splits step 0's variables off the cached leading block: check
+    # the split when either side is empty (flight at step 0 only; stance at step 0 only).
+    contact = np.full((N, 2), not stance_at_0)
+    contact[0] = stance_at_0
+    inp = make_input(contact=contact, v0=(0.3, -0.2, 0.0))
+    sol = MultiContactMpc(MpcSettings(qp=TIGHT)).update(inp)
+    ref = MultiContactMpc(MpcSettings(backend="piqp", qp=TIGHT)).update(inp)
+    assert sol.ok and ref.ok
+    # 1e-5 relative as in test_formulations_and_backends_agree (cond(H) ~ 1e7).
+    assert np.linalg.norm(sol.U - ref.U) / np.linalg.norm(ref.U) < 1e-5

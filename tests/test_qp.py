@@ -1,20 +1,31 @@
-"""Tests of locoplan.control.qp against problems with known optima, on both backends.
+"""Tests of locoplan.control.qp against problems with known optima, on every backend
+(proxsuite, piqp, daqp), and of daqp's least-distance path.
 
 Tolerances: the solvers run at eps_abs = 1e-9 on these well-conditioned problems (condition
 numbers below 1e3), so 1e-6 on x leaves three orders of margin for the solvers' regularisation
-and for the difference between interior-point (piqp) and augmented-Lagrangian (proxsuite)
-end points.
+and for the difference between interior-point (piqp), augmented-Lagrangian (proxsuite) and
+active-set (daqp, exact up to rounding) end points.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from locoplan.control.qp import BACKENDS, QpProblem, QpSettings, QpSolver, solve_qp
+from locoplan.control.qp import (
+    BACKENDS,
+    LeastDistanceForm,
+    QpProblem,
+    QpSettings,
+    QpSolver,
+    active_constraint_ids,
+    constraint_id,
+    solve_qp,
+)
 
 TIGHT = QpSettings(eps_abs=1e-9, eps_gap_abs=1e-9)
 TOL = 1e-6  # see the module docstring
@@ -171,7 +182,8 @@ def test_reuse_matches_fresh_solver(backend: str, warm_start: bool) -> None:
         s = solver.solve(p)
         fresh = solve_qp(p, backend, TIGHT)
         assert s.ok and fresh.ok
-        assert s.reused == (seed > 0)
+        # daqp keeps no solver object (one-shot daqp.solve), only the previous active set.
+        assert s.reused == (seed > 0 and backend != "daqp")
         np.testing.assert_allclose(s.x, fresh.x, atol=TOL)
         assert s.solve_time_s >= s.setup_time_s >= 0.0
 
@@ -237,3 +249,80 @@ def test_warm_start_never_reports_a_wrong_optimum() -> None:
         else:
             assert sol.status in {"inaccurate", "max_iterations"}
     assert n_ok > 0
+
+
+def _least_distance(p: QpProblem) -> LeastDistanceForm:
+    """U = L^-T (H = L L') and W = [U[box]; C U], the form's definition, computed plainly."""
+    U = np.linalg.inv(np.linalg.cholesky(p.H)).T
+    lo = p.x_lower if p.x_lower is not None else np.full(p.n, -np.inf)
+    hi = p.x_upper if p.x_upper is not None else np.full(p.n, np.inf)
+    box = np.flatnonzero(np.isfinite(lo) | np.isfinite(hi))
+    return LeastDistanceForm(U=U, W=np.vstack([U[box], p.C @ U]))
+
+
+def _inequality_problem(seed: int, scale: float = 1.0) -> QpProblem:
+    """_random_problem without its equalities; ``scale`` < 1 shrinks g (fewer active bounds)."""
+    p = _random_problem(seed)
+    return QpProblem(
+        H=p.H, g=scale * p.g, C=p.C, l=p.l, u=p.u, x_lower=p.x_lower, x_upper=p.x_upper
+    )
+
+
+def test_daqp_least_distance_matches_piqp() -> None:
+    for seed in range(4):
+        p = _inequality_problem(seed)
+        sol = QpSolver("daqp", TIGHT).solve(p, least_distance=_least_distance(p))
+        ref = solve_qp(p, "piqp", TIGHT)
+        assert sol.ok and ref.ok and sol.iterations > 0
+        np.testing.assert_allclose(sol.x, ref.x, atol=TOL)
+        # Multipliers of W's rows are the QP's: stationarity in x to 1e-6 (TOL).
+        np.testing.assert_allclose(_stationarity(p, sol), 0.0, atol=TOL)
+        np.testing.assert_allclose(sol.z_in, ref.z_in, atol=TOL)
+        np.testing.assert_allclose(sol.z_box, ref.z_box, atol=TOL)
+
+
+def test_daqp_least_distance_unconstrained_minimiser() -> None:
+    # g scaled down so far that -H^-1 g meets every bound: no DAQP iteration at all.
+    p = _inequality_problem(0, scale=1e-3)
+    sol = QpSolver("daqp", TIGHT).solve(p, least_distance=_least_distance(p))
+    assert sol.ok and sol.iterations == 0
+    np.testing.assert_allclose(sol.x, -np.linalg.solve(p.H, p.g), atol=1e-12)
+    assert not np.any(sol.z_in) and not np.any(sol.z_box)
+
+
+def test_daqp_active_hint_changes_iterations_not_the_optimum() -> None:
+    p = _inequality_problem(1)
+    form = _least_distance(p)
+    warm = replace(TIGHT, warm_start=True)
+    cold = QpSolver("daqp", TIGHT).solve(p, least_distance=form)
+    # The optimum's own active set: DAQP starts at the optimum.
+    good = QpSolver("daqp", warm).solve(
+        p, active_hint=active_constraint_ids(cold), least_distance=form
+    )
+    # A wrong guess: every upper bound of C's rows (more rows than variables).
+    bad_ids = constraint_id(p.n_in, p.n, np.arange(p.n_in), np.ones(p.n_in, dtype=bool))
+    bad = QpSolver("daqp", warm).solve(p, active_hint=bad_ids, least_distance=form)
+    for s in (good, bad):
+        assert s.ok, s.status
+        np.testing.assert_allclose(s.x, cold.x, atol=TOL)
+    assert good.iterations < cold.iterations
+    # The plain path takes the hint too.
+    plain = QpSolver("daqp", warm).solve(p, active_hint=active_constraint_ids(cold))
+    assert plain.ok and plain.iterations < cold.iterations
+    np.testing.assert_allclose(plain.x, cold.x, atol=TOL)
+
+
+def test_daqp_least_distance_infeasible_is_not_ok() -> None:
+    # A box lower bound above the upper bound, and an empty intersection of rows.
+    p = _inequality_problem(2)
+    lo = np.array(p.x_lower, copy=True)
+    lo[1] = 2.0  # x_upper[1] = 1
+    bad_box = replace(p, x_lower=lo)
+    C = np.vstack([np.ones(p.n), -np.ones(p.n)])
+    bad_rows = QpProblem(H=p.H, g=p.g, C=C, l=np.array([1.0, 1.0]), u=np.array([np.inf] * 2))
+    solver = QpSolver("daqp", TIGHT)
+    for q in (bad_box, bad_rows, bad_box):
+        sol = solver.solve(q, least_distance=_least_distance(q))
+        assert not sol.ok and sol.status == "primal_infeasible"
+    # The solver recovers on a feasible problem afterwards.
+    assert solver.solve(p, least_distance=_least_distance(p)).ok

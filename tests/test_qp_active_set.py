@@ -1,5 +1,6 @@
 """Tests of the dual active-set method (locoplan.control.qp_active_set) against closed forms and
-against piqp, and of its use inside QpSolver.
+against piqp. QpSolver no longer uses it (the MPC solves with daqp); it stays while
+qp.LeanDenseQp (the WBC's lean path) falls back to it.
 
 Tolerances: the method is exact up to rounding once it stops (stationarity holds by
 construction, the bounds to ``tol``); on these problems (cond(H) < 1e4) 1e-8 on x is
@@ -105,21 +106,6 @@ def test_iteration_cap_reported() -> None:
     p = _random(0)
     r = solve_dual_active_set(p.H, p.g, p.C, p.l, p.u, p.x_lower, p.x_upper, max_iter=1)
     assert r.status == "max_iterations"
-
-
-@pytest.mark.parametrize("backend", ["proxsuite", "piqp"])
-def test_qp_solver_uses_it_and_falls_back(backend: str) -> None:
-    p = _random(3)
-    fast = solve_qp(p, backend, QpSettings(active_set_iter=200, eps_abs=1e-10, scaling=True))
-    assert fast.ok and fast.active_set and fast.iterations > 0
-    capped = solve_qp(p, backend, QpSettings(active_set_iter=1, eps_abs=1e-10, eps_gap_abs=1e-10))
-    assert capped.ok and not capped.active_set
-    np.testing.assert_allclose(fast.x, capped.x, atol=1e-6)  # backend accuracy at eps 1e-10
-    infeasible = QpProblem(
-        H=np.eye(2), g=np.zeros(2), C=np.ones((1, 2)), l=np.array([1.0]), x_upper=np.full(2, 0.4)
-    )
-    sol = solve_qp(infeasible, backend, QpSettings(active_set_iter=10))
-    assert not sol.ok and sol.status == "primal_infeasible" and sol.active_set
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -27,10 +27,12 @@ wrench on omega and pdot) and a per-step-pair kernel K[k, l] (6 x 6) that depend
 linearisation yaws (cached) -- H[k, l] = Phi_k' K[k, l] Phi_l (see `mpc_terms`). The
 sparse form keeps the states as variables with the dynamics as equalities (for comparison).
 
-Solving (default): the dense dual active-set method of `qp_active_set`, started from the
-previous update's active set moved on by the elapsed steps, then proxsuite (Jacobi-scaled,
-cold) if it has not finished within 50 iterations; on failure the relaxed QP (f_min = 0),
-then the previous solution shifted. benchmarks/mpc_qp.py compares the alternatives.
+Solving (default): DAQP (a dual active-set solver, `qp` backend "daqp") on the QP's
+least-distance form y = U^-1 (x - x_u), H^-1 = U U', which the MPC computes from cached
+blocks (`MultiContactMpc._least_distance`): the unconstrained minimiser x_u when it meets
+every bound (most standing updates), else DAQP from a cold start. On failure the relaxed QP
+(f_min = 0), then the previous solution shifted. benchmarks/mpc_qp.py compares the
+alternatives (proxsuite and piqp stay selectable).
 """
 
 from __future__ import annotations
@@ -55,6 +57,8 @@ from locoplan.control.mpc_terms import (
     wrench_rows,
 )
 from locoplan.control.qp import (
+    BACKENDS,
+    LeastDistanceForm,
     QpProblem,
     QpSettings,
     QpSolution,
@@ -66,8 +70,7 @@ from locoplan.exceptions import SolverFailure
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 
-_potrf = scipy.linalg.get_lapack_funcs("potrf", dtype=np.float64)
-_trsm = scipy.linalg.get_blas_funcs("trsm", dtype=np.float64)
+_potrf, _trtri = scipy.linalg.get_lapack_funcs(("potrf", "trtri"), dtype=np.float64)
 
 MODELS: Final[tuple[str, ...]] = ("external-force", "combined")
 FORMULATIONS: Final[tuple[str, ...]] = ("condensed", "sparse")
@@ -94,14 +97,15 @@ _DEFAULT_R: Final = tuple(1e-4 * w for w in (1, 1, 1, 1, 1, 1, 5, 5, 5, 5))
 
 
 def _default_qp_settings() -> QpSettings:
+    # daqp: bounds to 1e-6 (N, N m); up to 100 active-set changes (41 seen cold, 5 kg held).
+    # The proxsuite-only fields keep that backend as it was measured (benchmarks/mpc_qp.py).
     return QpSettings(
         eps_abs=1e-6,
         eps_gap_abs=1e-6,
-        max_iter=50,
+        max_iter=100,
         max_iter_in=10,
         scaling=True,
         preconditioner=False,
-        active_set_iter=50,
         eps_primal_inf=1e-9,
     )
 
@@ -114,12 +118,13 @@ class MpcSettings:
     (10,) the diagonal of R on [F1, F2, M1, M2] (the paper's order). ``mu`` friction
     coefficient, ``f_min``/``f_max`` vertical force bounds per stance foot (N), ``toe``/``heel``
     foot lengths ahead of/behind the ankle (m), ``mu_torsion`` (m) bounds |Mz'| <= mu_t Fz if
-    given. ``backend`` "proxsuite" | "piqp", ``formulation`` "condensed" | "sparse", ``qp``
-    the solver settings. ``fallback``: on a failed QP try the relaxed problem (f_min = 0, more
-    iterations, fresh solver; ``relaxed_qp`` overrides its solver settings), then the previous
-    solution shifted by one step; if False, raise `SolverFailure` at once. The force bounds
-    are not cross-checked here: an empty range makes every QP infeasible, which
-    `MultiContactMpc.update` reports as a failure.
+    given. ``backend`` "daqp" | "proxsuite" | "piqp", ``formulation`` "condensed" |
+    "sparse", ``qp`` the solver settings (with ``qp.warm_start`` daqp starts from the previous
+    update's active set moved on by the elapsed steps). ``fallback``: on a failed QP try the
+    relaxed problem (f_min = 0, more iterations, fresh solver; ``relaxed_qp`` overrides its
+    solver settings), then the previous solution shifted by one step; if False, raise
+    `SolverFailure` at once. The force bounds are not cross-checked here: an empty range
+    makes every QP infeasible, which `MultiContactMpc.update` reports as a failure.
     """
 
     dt: float = 0.03
@@ -132,7 +137,7 @@ class MpcSettings:
     toe: float = 0.09
     heel: float = 0.06
     mu_torsion: float | None = None
-    backend: str = "proxsuite"
+    backend: str = "daqp"
     formulation: str = "condensed"
     qp: QpSettings = field(default_factory=_default_qp_settings)
     fallback: bool = True
@@ -151,7 +156,7 @@ class MpcSettings:
             raise ValueError("MpcSettings: mu, toe and heel must be >= 0")
         if self.mu_torsion is not None and self.mu_torsion < 0:
             raise ValueError("MpcSettings.mu_torsion must be >= 0")
-        if self.backend not in ("proxsuite", "piqp"):
+        if self.backend not in BACKENDS:
             raise ValueError(f"unknown MPC backend {self.backend!r}")
         if self.formulation not in FORMULATIONS:
             raise ValueError(f"unknown MPC formulation {self.formulation!r}")
@@ -275,10 +280,12 @@ class MultiContactMpc:
         # Previous QP's active constraints and stance foot-steps (k, foot), for the hint.
         self._prev_active: npt.NDArray[np.intp] | None = None
         self._prev_fs: npt.NDArray[np.intp] | None = None
-        # Leading block of H (steps 1..N-1) and its Cholesky factor, reused while it repeats.
-        self._chol_block: FloatArray | None = None
-        self._chol_factor: FloatArray | None = None
-        self._factor_buffers: dict[int, FloatArray] = {}  # read by the solver only
+        # Leading block of H (steps 1..N-1) and the inverse of its Cholesky factor (U11), reused
+        # while the block repeats; U and W buffers of the least-distance form (read by the
+        # solver only, rewritten by every update).
+        self._ld_block: FloatArray | None = None
+        self._ld_U11: FloatArray | None = None
+        self._ld_buffers: dict[tuple[int, int], tuple[FloatArray, FloatArray]] = {}
         self._gather_cache: dict[bytes, npt.NDArray[np.intp]] = {}
 
     # --- caches ----------------------------------------------------------------------------
@@ -453,11 +460,11 @@ class MultiContactMpc:
         qp = self._problem(inp, st, kern, x_free, s.f_min, s.f_max)
         shift = self._shift(inp)
         hint = self._active_hint(st.cols, qp, shift) if s.formulation == "condensed" else None
-        chol = None
-        if s.formulation == "condensed" and s.qp.active_set_iter > 0:
-            chol = self._cholesky(qp.H, int(np.count_nonzero(st.cols < 10)))
+        ldp = None
+        if s.formulation == "condensed" and s.backend == "daqp":
+            ldp = self._least_distance(qp, int(np.count_nonzero(st.cols < 10)))
         t1 = time.perf_counter()
-        sol = self._solver.solve(qp, active_hint=hint, cholesky=chol)
+        sol = self._solver.solve(qp, active_hint=hint, least_distance=ldp)
         t2 = time.perf_counter()
         solve_time = sol.solve_time_s
         outside = (t1 - t0) + (t2 - t1 - sol.solve_time_s)
@@ -470,7 +477,8 @@ class MultiContactMpc:
             t3 = time.perf_counter()
             relaxed_qp = self._problem(inp, st, kern, x_free, 0.0, max(s.f_max, s.f_min))
             relaxed_settings = s.relaxed_qp if s.relaxed_qp is not None else _relaxed(s.qp)
-            relaxed = QpSolver(s.backend, relaxed_settings).solve(relaxed_qp)
+            # Same H and the same finite box sides (f_min = 0 is finite): same form.
+            relaxed = QpSolver(s.backend, relaxed_settings).solve(relaxed_qp, least_distance=ldp)
             solve_time += relaxed.solve_time_s
             outside += time.perf_counter() - t3 - relaxed.solve_time_s
             if relaxed.ok:
@@ -569,44 +577,74 @@ class MultiContactMpc:
             self._gather_cache[key] = idx
         return idx
 
-    def _cholesky(self, H: FloatArray, n0: int) -> FloatArray | None:
-        """Lower Cholesky factor of H whose last n0 variables are step 0's (column-major).
+    def _least_distance(self, qp: QpProblem, n0: int) -> LeastDistanceForm | None:
+        """The `LeastDistanceForm` of the condensed QP, whose last n0 variables are step 0's.
 
-        The leading block depends only on the plan, so its factor is cached and reused while
-        the block repeats (always when standing); then only the n0 x n rows are factorised:
-        L21 = H21 L11^-T, L22 = chol(H22 - L21 L21'). None if H is not positive definite
-        (the solver then reports it).
+        U = L^-T for H = L L'. The leading block of H (steps 1..N-1) depends only on the plan,
+        so the inverse of its factor, U11 = L11^-T, is cached and reused while the block
+        repeats (always when standing); then only step 0's n0 columns are new:
+        L21 = H21 U11, L22 = chol(H22 - L21 L21'), U22 = L22^-T, U12 = -U11 L21' U22 and
+        U = [[U11, U12], [0, U22]]. C is block-diagonal (the same wrench rows per stance
+        foot-step), so C U is one batched product of the rows with U's 5-row slices. None if H
+        is not positive definite (the solver then gets the plain problem and reports it).
         """
+        H = qp.H
         n = H.shape[0]
         nA = n - n0
         A = H[:nA, :nA]
-        if (
-            self._chol_block is not None
-            and self._chol_factor is not None
-            and self._chol_block.shape == A.shape
-            and np.array_equal(self._chol_block, A)
-        ):
-            L_A = self._chol_factor
-        else:
-            L_A, info = _potrf(A.T, lower=1, clean=0, overwrite_a=0)
+        cached = (
+            self._ld_block is not None
+            and self._ld_U11 is not None
+            and self._ld_block.shape == A.shape
+            and np.array_equal(self._ld_block, A)
+        )
+        if not cached:
+            self._ld_block = self._ld_U11 = None
+            self._ld_buffers.clear()
+            U11_new = np.zeros((0, 0))
+            if nA:  # LAPACK rejects empty matrices (stance at step 0 only)
+                L11, info = _potrf(A.T, lower=1, clean=1, overwrite_a=0)
+                if info != 0:
+                    return None
+                # L11^-T as the inverse of the upper factor L11' (LAPACK's upper trtri is
+                # 25 % faster here than the lower one: 66 vs 89 us at n = 120).
+                U11_F, info = _trtri(L11.T, lower=0)
+                if info != 0:
+                    return None
+                U11_new = np.ascontiguousarray(U11_F)
+            self._ld_block, self._ld_U11 = A.copy(), U11_new
+        U11 = self._ld_U11
+        assert U11 is not None
+        x_lo = qp.x_lower if qp.x_lower is not None else np.full(n, -np.inf)
+        x_hi = qp.x_upper if qp.x_upper is not None else np.full(n, np.inf)
+        box = np.flatnonzero(np.isfinite(x_lo) | np.isfinite(x_hi))
+        n_fs, R, n_b = n // 5, self._rows.shape[0], box.shape[0]
+        bufs = self._ld_buffers.get((n, n_b))
+        fresh = bufs is None
+        if bufs is None:
+            U = np.zeros((n, n))
+            U[:nA, :nA] = U11
+            bufs = (U, np.zeros((n_b + n_fs * R, n)))
+            self._ld_buffers[(n, n_b)] = bufs
+        U, W = bufs
+        if n0:
+            L21 = H[nA:, :nA] @ U11
+            L22, info = _potrf(H[nA:, nA:] - L21 @ L21.T, lower=1, clean=1, overwrite_a=0)
             if info != 0:
-                self._chol_block = self._chol_factor = None
                 return None
-            self._chol_block, self._chol_factor = A.copy(), L_A
-        if n0 == 0:
-            return L_A
-        X = np.asarray(_trsm(1.0, L_A, H[nA:, :nA].T, lower=1))  # L_A X = H12, X = L21'
-        L22, info = _potrf(H[nA:, nA:] - X.T @ X, lower=1, clean=0, overwrite_a=0)
-        if info != 0:
-            return None
-        L = self._factor_buffers.get(n)
-        if L is None:
-            L = np.empty((n, n), order="F")
-            self._factor_buffers[n] = L
-        L[:nA, :nA] = L_A
-        L[nA:, :nA] = X.T
-        L[nA:, nA:] = L22
-        return L
+            U22, info = _trtri(L22.T, lower=0)
+            if info != 0:
+                return None
+            U[:nA, nA:] = -(U11 @ (L21.T @ U22))
+            U[nA:, nA:] = U22
+        # W = [U[box]; C U]. Columns :nA of U, hence of W, are U11's and zeros: they change
+        # only with the block (the buffers are then new), so an update rewrites step 0's
+        # columns only.
+        cols = slice(0, n) if fresh else slice(nA, n)
+        W[:n_b, cols] = U[box, cols]
+        W_rows = W[n_b:].reshape(n_fs, R, n)
+        W_rows[:, :, cols] = self._rows @ U[:, cols].reshape(n_fs, 5, -1)
+        return LeastDistanceForm(U=U, W=W)
 
     def _shift(self, inp: MpcInput) -> int:
         """Whole MPC steps elapsed since the previous update (from ``MpcInput.t``)."""
@@ -671,5 +709,4 @@ def _relaxed(qp: QpSettings) -> QpSettings:
         preconditioner=True,
         update_preconditioner=True,
         scaling=True,
-        active_set_iter=0,
     )

@@ -1,4 +1,4 @@
-"""Convex QP layer: the only module that imports a QP solver (proxsuite, piqp).
+"""Convex QP layer: the only module that imports a QP solver (proxsuite, piqp, daqp).
 
 Problem (all parts but ``H`` and ``g`` optional)::
 
@@ -11,7 +11,7 @@ Matrices are dense numpy arrays, or ``scipy.sparse`` matrices for the sparse sol
 (all of ``H``, ``A``, ``C`` sparse then). Absent bounds are ``+-inf``, never ``+-1e20``:
 piqp counts 1e20 as a finite bound and runs into its iteration limit.
 
-Dual convention of `QpSolution` (both backends mapped to it)::
+Dual convention of `QpSolution` (every backend mapped to it)::
 
     H x + g + A' y_eq + C' z_in + z_box = 0
 
@@ -21,6 +21,14 @@ with ``z_in > 0`` where an upper bound is active and ``< 0`` where a lower bound
 (and, for sparse problems, its sparsity pattern), only updates the data. Warm starts are off
 by default: in closed loop with contact switches a warm-started proxsuite ran into its
 iteration limit on most stepping MPC QPs (see stack-notes.md).
+
+daqp (DAQP 0.11, a dual active-set method in C) is dense only (sparse problems are
+densified) and needs H positive definite; it is exact once it stops (no residual
+tolerance, only ``eps_abs`` on its normalised rows), and its warm start is a guessed active
+set, which changes the iteration count but never the optimum. Given a problem's
+`LeastDistanceForm` (the caller's factor of H^-1 and the constraint rows in it) it skips
+DAQP's own O(n^3) transformation and first checks the unconstrained minimiser; that is the
+MPC's path.
 
 Neither proxsuite 0.8 nor piqp 0.7 has a wall-time limit; ``max_iter`` is the cap.
 proxsuite stops on primal/dual residuals alone by default and then may return a point 1e-5
@@ -35,19 +43,21 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Final, TypeAlias
 
+import daqp
 import numpy as np
 import numpy.typing as npt
 import piqp
 import scipy.sparse as sp
 from proxsuite import proxqp
 
-from locoplan.control.qp_active_set import constraint_ids, solve_dual_active_set
+# Only LeanDenseQp (the lean WBC path at the end of this module) still uses it.
+from locoplan.control.qp_active_set import solve_dual_active_set
 
 FloatArray = npt.NDArray[np.float64]
 # A dense FloatArray or a scipy.sparse matrix (scipy ships no type stubs here).
 Matrix: TypeAlias = Any
 
-BACKENDS: Final[tuple[str, ...]] = ("proxsuite", "piqp")
+BACKENDS: Final[tuple[str, ...]] = ("proxsuite", "piqp", "daqp")
 
 _PROXSUITE_STATUS: Final[dict[Any, str]] = {
     proxqp.PROXQP_SOLVED: "solved",
@@ -66,6 +76,27 @@ _PIQP_STATUS: Final[dict[Any, str]] = {
     piqp.PIQP_UNSOLVED: "unsolved",
     piqp.PIQP_INVALID_SETTINGS: "invalid_settings",
 }
+# DAQP's exit flags (constants.h of DAQP 0.11). 2 is "optimal with soft constraints
+# violated": no soft constraints are ever declared here. -2 (cycling) and -5 (H not positive
+# definite) are numerical failures; -6: the guessed active set had more linearly independent
+# constraints than variables.
+_DAQP_STATUS: Final[dict[int, str]] = {
+    1: "solved",
+    2: "solved",
+    -1: "primal_infeasible",
+    -2: "numerical_error",
+    -3: "dual_infeasible",
+    -4: "max_iterations",
+    -5: "numerical_error",
+    -6: "numerical_error",
+    -7: "max_iterations",
+    -8: "invalid_settings",
+}
+# DAQP's constraint sense flags: active (a warm-start guess), active at the lower bound,
+# equality.
+_DAQP_ACTIVE: Final = 1
+_DAQP_LOWER: Final = 2
+_DAQP_EQUALITY: Final = 5
 
 
 def _is_sparse(M: object) -> bool:
@@ -165,16 +196,15 @@ class QpSettings:
     ``eps_abs``/``eps_rel`` bound the primal and dual residuals, ``eps_gap_abs``/
     ``eps_gap_rel`` the duality gap (checked when ``check_duality_gap``). ``max_iter`` caps
     the iterations (a problem that hits it is a failure). ``warm_start`` starts from the
-    previous solution (proxsuite only: piqp is an interior-point method and starts cold).
+    previous solution (proxsuite), or for daqp from the ``active_hint`` given to
+    `QpSolver.solve`, else from the previous solution's active set (piqp is an
+    interior-point method and always starts cold).
     ``preconditioner`` lets the backend equilibrate the problem (proxsuite's Ruiz scaling costs
     about 1 ms on a 200-variable dense problem); ``update_preconditioner`` recomputes it when
     a re-used proxsuite solver gets new matrices. ``scaling`` applies a Jacobi scaling
-    x = D y, D = diag(H)^-1/2, before the backend (cheap, O(n^2)). ``active_set_iter`` > 0
-    (dense problems without equalities, positive definite H) first runs the dual active-set
-    method of `qp_active_set` for at most that many iterations: it starts at the unconstrained
-    minimiser (one Cholesky factorisation) and costs O(n^2) per active constraint, far less
-    than a backend call when few constraints are active; the backend runs only if it does not
-    finish. Its result meets every bound to ``eps_abs`` and is otherwise exact.
+    x = D y, D = diag(H)^-1/2, before the backend (cheap, O(n^2)). ``active_set_iter`` is
+    read by `LeanDenseQp` only (the iteration cap of its active-set fallback); `QpSolver`
+    ignores it.
     ``eps_primal_inf``/``eps_dual_inf`` are the infeasibility-detection thresholds
     (None: the backend's; proxsuite's default 1e-4 declared feasible MPC problems infeasible).
     ``max_iter_in`` caps proxsuite's inner iterations per outer one (None: its 1500): on an
@@ -229,13 +259,12 @@ class QpSolution:
     of "solved", "max_iterations", "primal_infeasible", "dual_infeasible", "inaccurate",
     "closest_primal_feasible", "numerical_error", "unsolved", "invalid_settings", "not_run",
     "non_finite"; ``ok`` is True only for "solved" with a finite x. ``solve_time_s`` is the
-    wall time of the solve call (scaling, the active-set attempt, the backend's data
-    update/setup and solve; s), of which ``setup_time_s`` was the backend's update/setup.
-    ``active_set``: the dual active-set method solved it and the backend did not run
-    (``iterations`` are then its iterations, 0 when the unconstrained minimiser was feasible).
-    Residuals are infinity norms (the backend's, or ours for the active-set path, whose dual
-    residual is zero by construction up to rounding). Duals follow
-    ``H x + g + A'y_eq + C'z_in + z_box = 0``.
+    wall time of the solve call (scaling, the backend's data update/setup and solve; s), of
+    which ``setup_time_s`` was the backend's update/setup. ``iterations``: 0 when the
+    unconstrained minimiser met every bound on daqp's least-distance path. ``active_set``:
+    `LeanDenseQp`'s own active-set method solved it (False from `QpSolver`). Residuals are
+    infinity norms (the backend's; on daqp's least-distance path the dual residual is zero by
+    construction up to rounding). Duals follow ``H x + g + A'y_eq + C'z_in + z_box = 0``.
     """
 
     x: FloatArray
@@ -349,12 +378,39 @@ def _violation(p: QpProblem, x: FloatArray) -> float:
     return v
 
 
+def constraint_id(m: int, n: int, row: npt.ArrayLike, upper: npt.ArrayLike) -> npt.NDArray[np.intp]:
+    """Ids of one-sided constraints of a QP with m rows in C and n variables: ``row`` < m is
+    a row of C, m + i the box on x_i; ``upper`` selects the upper bound (id + m + n), else
+    the lower."""
+    r = np.asarray(row, dtype=np.intp)
+    return np.where(np.asarray(upper, dtype=bool), (m + n) + r, r)
+
+
+@dataclass(frozen=True, slots=True)
+class LeastDistanceForm:
+    """A dense QP without equalities in least-distance form, for daqp.
+
+    With a square factor ``U`` (n, n) of the inverse Hessian, H^-1 = U U' (e.g. L^-T for
+    H = L L'), and x = x_u + U y, where x_u = -H^-1 g is the unconstrained minimiser, the QP
+    is min 1/2 |y|^2 subject to the QP's bounds, shifted by x_u, on the rows of
+    ``W`` (n_b + n_in, n): U[box_index] (the box on x) above C U, where ``box_index`` are the
+    n_b variables with a finite lower or upper bound, in increasing order. That is DAQP's own
+    internal form: it reaches it with an O(n^3) transformation in plain C (2.5 ms at
+    n = 200), which a caller that knows the structure of its problem (cached factor blocks,
+    a block-diagonal C) computes far faster. The multipliers of W's rows are the QP's (the
+    same constraints, in y). Neither array is kept after the solve.
+    """
+
+    U: FloatArray
+    W: FloatArray
+
+
 class QpSolver:
     """Stateful QP solver: keeps the backend object and re-uses it while dimensions hold.
 
-    ``backend`` is "proxsuite" or "piqp". Dense problems go to the dense solvers, sparse
-    problems to the sparse ones (proxsuite's sparse solver has no box: the box becomes
-    inequality rows there).
+    ``backend`` is "proxsuite", "piqp" or "daqp". Dense problems go to the dense solvers,
+    sparse problems to the sparse ones (proxsuite's sparse solver has no box: the box becomes
+    inequality rows there; daqp has no sparse solver: the matrices are densified).
     """
 
     def __init__(self, backend: str = "proxsuite", settings: QpSettings | None = None) -> None:
@@ -376,54 +432,23 @@ class QpSolver:
         self,
         problem: QpProblem,
         active_hint: npt.ArrayLike | None = None,
-        cholesky: FloatArray | None = None,
+        least_distance: LeastDistanceForm | None = None,
     ) -> QpSolution:
         """Solve ``problem``; never raises on solver failure (check ``ok``/``status``).
 
-        For the active-set path only: ``active_hint`` guessed active constraint ids (see
-        `qp_active_set.constraint_ids`; `active_constraint_ids` of a previous solution),
-        ``cholesky`` the lower Cholesky factor of H if the caller already has it.
+        ``active_hint``: guessed active constraint ids (see `constraint_id`;
+        `active_constraint_ids` of a previous solution), daqp's starting active set with
+        ``settings.warm_start`` (other backends ignore it). ``least_distance``: the
+        problem's `LeastDistanceForm` if the caller has it (daqp only, dense, no
+        equalities); ``settings.scaling`` is then not applied (DAQP normalises W's rows).
         """
         s = self.settings
         t0 = time.perf_counter()
         p = problem
-        if s.active_set_iter > 0 and p.n_eq == 0 and not p.is_sparse:
-            # The method is invariant to a diagonal scaling: it runs on the problem as given,
-            # its tolerance is on the bounds in their own units.
-            r = solve_dual_active_set(
-                p.H,
-                p.g,
-                p.C,
-                p.l,
-                p.u,
-                p.x_lower,
-                p.x_upper,
-                s.eps_abs,
-                s.active_set_iter,
-                initial_active=active_hint,
-                cholesky=cholesky,
-            )
-            if r.status in ("solved", "infeasible"):
-                # "infeasible" is a certificate: the violated constraint's normal is a
-                # non-positive combination of active normals (Farkas), no backend needed.
-                ok = r.status == "solved"
-                return QpSolution(
-                    x=r.x,
-                    status="solved" if ok else "primal_infeasible",
-                    ok=ok,
-                    iterations=r.iterations,
-                    solve_time_s=time.perf_counter() - t0,
-                    setup_time_s=0.0,
-                    primal_residual=r.max_violation,
-                    dual_residual=0.0,
-                    objective=problem.objective(r.x) if ok else math.nan,
-                    backend=self.backend,
-                    reused=False,
-                    active_set=True,
-                    y_eq=np.zeros(0),
-                    z_in=r.z_in,
-                    z_box=r.z_box,
-                )
+        if least_distance is not None:
+            if self.backend != "daqp" or p.is_sparse or p.n_eq:
+                raise ValueError("least_distance needs the daqp backend and a dense QP without A")
+            return self._solve_daqp_least_distance(p, least_distance, active_hint, t0)
         p, d = _jacobi_scaled(problem) if s.scaling else (problem, None)
         key = _structure_key(p)
         reuse = self._solver is not None and key == self._key
@@ -432,6 +457,8 @@ class QpSolver:
                 raw = self._solve_proxsuite_sparse(p, reuse, key)
             else:
                 raw = self._solve_proxsuite_dense(p, reuse, key)
+        elif self.backend == "daqp":
+            raw = self._solve_daqp(p, key, active_hint)
         else:
             raw = self._solve_piqp(p, reuse, key)
         t1 = time.perf_counter()
@@ -646,16 +673,276 @@ class QpSolver:
             z_box=z_box,
         )
 
+    # --- daqp ------------------------------------------------------------------------------
+
+    def _daqp_sense(
+        self,
+        p: QpProblem,
+        n_box: int,
+        hint: npt.ArrayLike | None,
+        lower: FloatArray,
+        upper: FloatArray,
+    ) -> npt.NDArray[np.intc]:
+        """DAQP's sense flags: equality rows, and with ``warm_start`` the guessed active set
+        (``hint``, else the previous solution's when the rows are the same), on finite bounds
+        only (``lower``/``upper`` of DAQP's rows)."""
+        s = self.settings
+        m, n = p.n_in, p.n
+        k = n_box + m  # inequality rows
+        sense = np.zeros(k + p.n_eq, dtype=np.intc)
+        sense[k:] = _DAQP_EQUALITY
+        if not s.warm_start:
+            return sense
+        if hint is None:
+            prev = self._solver
+            if isinstance(prev, np.ndarray) and self._has_result and prev.shape[0] == k:
+                sense[:k] = prev
+        else:
+            # Hint ids: j < m is the lower bound of C's row j, m + i the lower bound of x_i,
+            # the same plus (m + n) the upper bound. DAQP's rows: the box first, then C's.
+            ids = np.asarray(hint, dtype=np.intp).reshape(-1)
+            ids = ids[(ids >= 0) & (ids < 2 * (m + n))]
+            up = ids >= m + n
+            j = np.where(up, ids - (m + n), ids)
+            is_row = j < m
+            idx = np.where(is_row, n_box + j, j - m)
+            keep = is_row | (n_box > 0)
+            sense[idx[keep]] = np.where(up[keep], _DAQP_ACTIVE, _DAQP_ACTIVE | _DAQP_LOWER)
+        # A guess on an infinite bound would pin the row at infinity.
+        on_lower = (sense[:k] & _DAQP_LOWER) > 0
+        finite = np.where(on_lower, np.isfinite(lower[:k]), np.isfinite(upper[:k]))
+        sense[:k][~finite] = 0
+        return sense
+
+    def _solve_daqp(
+        self, p: QpProblem, key: tuple[object, ...], hint: npt.ArrayLike | None
+    ) -> _Raw:
+        # One-shot daqp.solve rather than a re-used daqp.Model: H changes at every MPC update
+        # anyway, and Model.update always forms DAQP's whole transformed problem (H^-1/2 and
+        # the constraint rows in it: 2.5 ms at n = 200), while daqp.solve first checks the
+        # unconstrained minimiser (one Cholesky factorisation: 0.5 ms).
+        s = self.settings
+        n, m, n_eq = p.n, p.n_in, p.n_eq
+
+        def dense(M: Matrix) -> FloatArray:
+            out = M.toarray() if p.is_sparse else M
+            return np.ascontiguousarray(out, dtype=np.float64)
+
+        # DAQP's rows: n simple bounds on x (when there is a box), C's rows, A's rows
+        # (equalities, l = u = b).
+        n_box = n if p.has_box else 0
+        mats = [dense(M) for M in (p.C, p.A) if M is not None]
+        A_all = (mats[0] if len(mats) == 1 else np.vstack(mats)) if mats else np.zeros((0, n))
+        upper: list[FloatArray] = []
+        lower: list[FloatArray] = []
+        if p.has_box:
+            upper.append(_inf_fill(p.x_upper, n, 1.0))
+            lower.append(_inf_fill(p.x_lower, n, -1.0))
+        if p.C is not None:
+            upper.append(_inf_fill(p.u, m, 1.0))
+            lower.append(_inf_fill(p.l, m, -1.0))
+        if p.A is not None:
+            assert p.b is not None
+            upper.append(p.b)
+            lower.append(p.b)
+        bu = np.ascontiguousarray(np.concatenate(upper) if upper else np.zeros(0))
+        bl = np.ascontiguousarray(np.concatenate(lower) if lower else np.zeros(0))
+        sense = self._daqp_sense(p, n_box, hint, bl, bu)
+        # DAQP reads as many entries of each array as it has rows: never pass a short one.
+        if not (bu.shape == bl.shape == sense.shape == (n_box + A_all.shape[0],)):
+            raise AssertionError("daqp: inconsistent row counts")
+        x, _, flag, info = daqp.solve(
+            dense(p.H),
+            np.ascontiguousarray(p.g, dtype=np.float64),
+            A_all,
+            bu,
+            bl,
+            sense,
+            primal_tol=s.eps_abs,
+            iter_limit=s.max_iter,
+        )
+        status = _DAQP_STATUS.get(int(flag), f"daqp_{flag}")
+        lam = np.asarray(info["lam"], dtype=np.float64)
+        x = np.asarray(x, dtype=np.float64)
+        if status != "solved":
+            # The multipliers of a failed solve are not meaningful (DAQP leaves them unset).
+            self._solver, self._key = None, None
+            return _Raw(
+                x=x,
+                status=status,
+                iterations=int(info["iterations"]),
+                setup_time_s=float(info["setup_time"]),
+                primal_residual=math.inf,
+                dual_residual=math.inf,
+                reused=False,
+                y_eq=np.zeros(n_eq),
+                z_in=np.zeros(m),
+                z_box=np.zeros(n),
+            )
+        z_box = lam[:n].copy() if p.has_box else np.zeros(n)
+        z_in = lam[n_box : n_box + m].copy()
+        y_eq = lam[n_box + m :].copy()
+        # The active set, for a warm start of the next solve (see _daqp_sense).
+        act = np.zeros(n_box + m, dtype=np.intc)
+        act[lam[: n_box + m] > 0.0] = _DAQP_ACTIVE
+        act[lam[: n_box + m] < 0.0] = _DAQP_ACTIVE | _DAQP_LOWER
+        self._solver, self._key = act, key
+        stat = p.H @ x + p.g + z_box
+        if p.A is not None:
+            stat = stat + p.A.T @ y_eq
+        if p.C is not None:
+            stat = stat + p.C.T @ z_in
+        return _Raw(
+            x=x,
+            status=status,
+            iterations=int(info["iterations"]),
+            setup_time_s=float(info["setup_time"]),
+            primal_residual=_violation(p, x),
+            dual_residual=float(np.max(np.abs(stat), initial=0.0)),
+            reused=False,
+            y_eq=y_eq,
+            z_in=z_in,
+            z_box=z_box,
+        )
+
+    def _solve_daqp_least_distance(
+        self, p: QpProblem, form: LeastDistanceForm, hint: npt.ArrayLike | None, t0: float
+    ) -> QpSolution:
+        s = self.settings
+        n, m = p.n, p.n_in
+        U, W = form.U, form.W
+        box = np.zeros(0, dtype=np.intp)
+        lo_parts: list[FloatArray] = []
+        hi_parts: list[FloatArray] = []
+        if p.has_box:
+            x_lo = _inf_fill(p.x_lower, n, -1.0)
+            x_hi = _inf_fill(p.x_upper, n, 1.0)
+            box = np.flatnonzero(np.isfinite(x_lo) | np.isfinite(x_hi))
+            lo_parts.append(x_lo[box])
+            hi_parts.append(x_hi[box])
+        if p.C is not None:
+            lo_parts.append(_inf_fill(p.l, m, -1.0))
+            hi_parts.append(_inf_fill(p.u, m, 1.0))
+        n_b = box.shape[0]
+        if U.shape != (n, n) or W.shape != (n_b + m, n):
+            raise ValueError(
+                f"LeastDistanceForm: U {U.shape}, W {W.shape}; expected ({n}, {n}) and "
+                f"({n_b + m}, {n})"
+            )
+        x_u = U @ (U.T @ p.g)
+        np.negative(x_u, out=x_u)
+        # Bounds on W y: the QP's bounds minus the rows' values at x_u.
+        at_xu = np.empty(n_b + m)
+        at_xu[:n_b] = x_u[box]
+        if p.C is not None:
+            at_xu[n_b:] = p.C @ x_u
+        lower = np.concatenate(lo_parts) - at_xu if lo_parts else np.zeros(0)
+        upper = np.concatenate(hi_parts) - at_xu if hi_parts else np.zeros(0)
+        viol = max(float(lower.max(initial=0.0)), float(-upper.min(initial=0.0)))
+        z_in, z_box = np.zeros(m), np.zeros(n)
+        if viol <= s.eps_abs:
+            # The unconstrained minimiser meets every bound: DAQP is not needed.
+            return self._least_distance_solution(p, t0, x_u, "solved", 0, 0.0, viol, z_in, z_box)
+        sense = np.zeros(n_b + m, dtype=np.intc)
+        keep_state = s.warm_start and hint is None and self._has_result
+        if s.warm_start and hint is not None:
+            ids = np.asarray(hint, dtype=np.intp).reshape(-1)
+            ids = ids[(ids >= 0) & (ids < 2 * (m + n))]
+            up = ids >= m + n
+            # Row of W of each constraint: C's row j at n_b + j, the box on x_i at its place
+            # in box, -1 for a box side W does not hold.
+            w_row = np.full(m + n, -1, dtype=np.intp)
+            w_row[:m] = n_b + np.arange(m)
+            w_row[m + box] = np.arange(n_b)
+            idx = w_row[np.where(up, ids - (m + n), ids)]
+            up = up[idx >= 0]
+            idx = idx[idx >= 0]
+            # Only a finite bound can be active.
+            ok = np.where(up, np.isfinite(upper[idx]), np.isfinite(lower[idx]))
+            sense[idx[ok]] = np.where(up[ok], _DAQP_ACTIVE, _DAQP_ACTIVE | _DAQP_LOWER)
+        t1 = time.perf_counter()
+        model = self._solver
+        key = ("least_distance", n, n_b + m)
+        if isinstance(model, daqp.Model) and self._key == key:
+            # Without sense, DAQP starts from the active set its previous solve ended with.
+            flag = int(
+                model.update(A=W, bupper=upper, blower=lower, sense=None if keep_state else sense)
+            )
+            reused = True
+        else:
+            model = daqp.Model()
+            model.settings = {"primal_tol": s.eps_abs, "iter_limit": s.max_iter}
+            flag = int(model.setup(np.eye(n), np.zeros(n), W, upper, lower, sense)[0])
+            self._solver, self._key = model, key
+            reused = False
+        setup = time.perf_counter() - t1
+        if flag < 0:
+            self.reset()
+            status = _DAQP_STATUS.get(flag, f"daqp_{flag}")
+            nan = np.full(n, math.nan)
+            return self._least_distance_solution(
+                p, t0, nan, status, 0, setup, math.inf, z_in, z_box, reused
+            )
+        y, _, flag, info = model.solve()
+        status = _DAQP_STATUS.get(int(flag), f"daqp_{flag}")
+        x = x_u + U @ y
+        if status == "solved":
+            lam = np.asarray(info["lam"], dtype=np.float64)
+            z_box[box] = lam[:n_b]
+            z_in = lam[n_b:]
+            viol = _violation(p, x)
+        else:
+            viol = math.inf
+        return self._least_distance_solution(
+            p, t0, x, status, int(info["iterations"]), setup, viol, z_in, z_box, reused
+        )
+
+    def _least_distance_solution(
+        self,
+        p: QpProblem,
+        t0: float,
+        x: FloatArray,
+        status: str,
+        iterations: int,
+        setup: float,
+        violation: float,
+        z_in: FloatArray,
+        z_box: FloatArray,
+        reused: bool = False,
+    ) -> QpSolution:
+        ok = status == "solved" and bool(np.all(np.isfinite(x)))
+        # A failed solve leaves no active set to warm-start from.
+        self._has_result = ok
+        return QpSolution(
+            x=x,
+            status=status if status != "solved" or ok else "non_finite",
+            ok=ok,
+            iterations=iterations,
+            solve_time_s=time.perf_counter() - t0,
+            setup_time_s=setup,
+            primal_residual=violation,
+            # Exact by construction: y = -W' lam is DAQP's stationarity in y, and
+            # x = x_u + U y maps it to H x + g + C' z_in + z_box = 0 (up to rounding).
+            dual_residual=0.0 if ok else math.inf,
+            objective=p.objective(x) if ok else math.nan,
+            backend=self.backend,
+            reused=reused,
+            active_set=False,
+            y_eq=np.zeros(0),
+            z_in=z_in,
+            z_box=z_box,
+        )
+
 
 def active_constraint_ids(sol: QpSolution, rel_tol: float = 1e-9) -> npt.NDArray[np.intp]:
-    """Ids (`qp_active_set.constraint_ids` numbering) of the constraints whose multiplier in
+    """Ids (`constraint_id` numbering) of the constraints whose multiplier in
     ``sol`` is nonzero (above rel_tol times the largest): a hint for the next, similar QP."""
     z = np.concatenate([sol.z_in, sol.z_box])
     if z.shape[0] == 0 or not np.all(np.isfinite(z)):
         return np.zeros(0, dtype=np.intp)
     thresh = rel_tol * float(np.max(np.abs(z), initial=0.0))
     nz = np.flatnonzero(np.abs(z) > thresh)
-    return constraint_ids(sol.z_in.shape[0], sol.z_box.shape[0], nz, z[nz] > 0)
+    return constraint_id(sol.z_in.shape[0], sol.z_box.shape[0], nz, z[nz] > 0)
 
 
 def solve_qp(
