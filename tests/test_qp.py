@@ -252,12 +252,14 @@ def test_warm_start_never_reports_a_wrong_optimum() -> None:
 
 
 def _least_distance(p: QpProblem) -> LeastDistanceForm:
-    """U = L^-T (H = L L') and W = [U[box]; C U], the form's definition, computed plainly."""
+    """x_u = -H^-1 g, U = L^-T (H = L L') and W = [U[box]; C U], the form's definition,
+    computed plainly."""
     U = np.linalg.inv(np.linalg.cholesky(p.H)).T
     lo = p.x_lower if p.x_lower is not None else np.full(p.n, -np.inf)
     hi = p.x_upper if p.x_upper is not None else np.full(p.n, np.inf)
     box = np.flatnonzero(np.isfinite(lo) | np.isfinite(hi))
-    return LeastDistanceForm(U=U, W=np.vstack([U[box], p.C @ U]))
+    W = np.vstack([U[box], p.C @ U])
+    return LeastDistanceForm(x_u=-np.linalg.solve(p.H, p.g), factors=lambda: (U, W))
 
 
 def _inequality_problem(seed: int, scale: float = 1.0) -> QpProblem:
@@ -284,7 +286,12 @@ def test_daqp_least_distance_matches_piqp() -> None:
 def test_daqp_least_distance_unconstrained_minimiser() -> None:
     # g scaled down so far that -H^-1 g meets every bound: no DAQP iteration at all.
     p = _inequality_problem(0, scale=1e-3)
-    sol = QpSolver("daqp", TIGHT).solve(p, least_distance=_least_distance(p))
+    form = _least_distance(p)
+
+    def no_factors() -> tuple[np.ndarray, np.ndarray]:
+        raise AssertionError("U and W are not needed when x_u meets every bound")
+
+    sol = QpSolver("daqp", TIGHT).solve(p, least_distance=replace(form, factors=no_factors))
     assert sol.ok and sol.iterations == 0
     np.testing.assert_allclose(sol.x, -np.linalg.solve(p.H, p.g), atol=1e-12)
     assert not np.any(sol.z_in) and not np.any(sol.z_box)

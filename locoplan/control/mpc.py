@@ -71,6 +71,7 @@ FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 
 _potrf, _trtri = scipy.linalg.get_lapack_funcs(("potrf", "trtri"), dtype=np.float64)
+_trsm, _trsv = scipy.linalg.get_blas_funcs(("trsm", "trsv"), dtype=np.float64)
 
 MODELS: Final[tuple[str, ...]] = ("external-force", "combined")
 FORMULATIONS: Final[tuple[str, ...]] = ("condensed", "sparse")
@@ -258,6 +259,16 @@ class MpcSolution:
     qp: QpSolution | None = field(repr=False)
 
 
+@dataclass(slots=True)
+class _LdBuffers:
+    """U (n, n) and W of the least-distance form; ``left_done``: W's columns of the cached
+    leading block are filled."""
+
+    U: FloatArray
+    W: FloatArray
+    left_done: bool = False
+
+
 class MultiContactMpc:
     """The MPC across updates: keeps the QP solver, cached matrices, the previous solution."""
 
@@ -280,12 +291,13 @@ class MultiContactMpc:
         # Previous QP's active constraints and stance foot-steps (k, foot), for the hint.
         self._prev_active: npt.NDArray[np.intp] | None = None
         self._prev_fs: npt.NDArray[np.intp] | None = None
-        # Leading block of H (steps 1..N-1) and the inverse of its Cholesky factor (U11), reused
-        # while the block repeats; U and W buffers of the least-distance form (read by the
-        # solver only, rewritten by every update).
+        # Leading block of H (steps 1..N-1), its Cholesky factor L11 and (once needed)
+        # U11 = L11^-T, reused while the block repeats; U and W buffers of the least-distance
+        # form (read by the solver only, rewritten by every update that needs them).
         self._ld_block: FloatArray | None = None
+        self._ld_L11: FloatArray | None = None
         self._ld_U11: FloatArray | None = None
-        self._ld_buffers: dict[tuple[int, int], tuple[FloatArray, FloatArray]] = {}
+        self._ld_buffers: dict[tuple[int, int], _LdBuffers] = {}
         self._gather_cache: dict[bytes, npt.NDArray[np.intp]] = {}
 
     # --- caches ----------------------------------------------------------------------------
@@ -580,71 +592,107 @@ class MultiContactMpc:
     def _least_distance(self, qp: QpProblem, n0: int) -> LeastDistanceForm | None:
         """The `LeastDistanceForm` of the condensed QP, whose last n0 variables are step 0's.
 
-        U = L^-T for H = L L'. The leading block of H (steps 1..N-1) depends only on the plan,
-        so the inverse of its factor, U11 = L11^-T, is cached and reused while the block
-        repeats (always when standing); then only step 0's n0 columns are new:
-        L21 = H21 U11, L22 = chol(H22 - L21 L21'), U22 = L22^-T, U12 = -U11 L21' U22 and
-        U = [[U11, U12], [0, U22]]. C is block-diagonal (the same wrench rows per stance
-        foot-step), so C U is one batched product of the rows with U's 5-row slices. None if H
-        is not positive definite (the solver then gets the plain problem and reports it).
+        H = L L' with L = [[L11, 0], [L21, L22]]. The leading block of H (steps 1..N-1)
+        depends only on the plan, so L11 is cached and reused while the block repeats (always
+        when standing); then only step 0's rows are new: L21 = H21 L11^-T and
+        L22 = chol(H22 - L21 L21'). x_u = -H^-1 g by substitution with L. U = L^-T and W are
+        built only when x_u violates a bound (the solver asks): U11 = L11^-T (cached with
+        L11), U22 = L22^-T, U12 = -U11 L21' U22, U = [[U11, U12], [0, U22]]; C is
+        block-diagonal (the same wrench rows per stance foot-step), so C U is one batched
+        product of the rows with U's 5-row slices, of which only step 0's columns change
+        while the block repeats. None if H is not positive definite (the solver then gets the
+        plain problem and reports it).
         """
-        H = qp.H
+        H, g = qp.H, qp.g
         n = H.shape[0]
         nA = n - n0
         A = H[:nA, :nA]
         cached = (
             self._ld_block is not None
-            and self._ld_U11 is not None
+            and self._ld_L11 is not None
             and self._ld_block.shape == A.shape
             and np.array_equal(self._ld_block, A)
         )
         if not cached:
-            self._ld_block = self._ld_U11 = None
+            self._ld_block = self._ld_L11 = self._ld_U11 = None
             self._ld_buffers.clear()
-            U11_new = np.zeros((0, 0))
+            L11_new = np.zeros((0, 0), order="F")
             if nA:  # LAPACK rejects empty matrices (stance at step 0 only)
-                L11, info = _potrf(A.T, lower=1, clean=1, overwrite_a=0)
+                L11_new, info = _potrf(A.T, lower=1, clean=1, overwrite_a=0)
                 if info != 0:
                     return None
+            self._ld_block, self._ld_L11 = A.copy(), L11_new
+        L11 = self._ld_L11
+        assert L11 is not None
+        # L21' = L11^-1 H12 (nA, n0); L22 = chol(H22 - L21 L21').
+        L21T = np.zeros((nA, n0))
+        L22 = np.zeros((n0, n0), order="F")
+        if n0:
+            if nA:
+                L21T = np.asarray(_trsm(1.0, L11, H[:nA, nA:], lower=1))
+            L22, info = _potrf(H[nA:, nA:] - L21T.T @ L21T, lower=1, clean=1, overwrite_a=0)
+            if info != 0:
+                return None
+        # x_u = -H^-1 g: L z = -g, then L' x = z, by blocks.
+        x_u = np.empty(n)
+        z1 = np.asarray(_trsv(L11, -g[:nA], lower=1)) if nA else np.zeros(0)
+        if n0:
+            z2 = np.asarray(_trsv(L22, -g[nA:] - L21T.T @ z1, lower=1))
+            x_u[nA:] = _trsv(L22, z2, lower=1, trans=1)
+            z1 = z1 - L21T @ x_u[nA:]
+        if nA:
+            x_u[:nA] = _trsv(L11, z1, lower=1, trans=1)
+        box = np.flatnonzero(
+            (np.isfinite(qp.x_lower) if qp.x_lower is not None else np.zeros(n, dtype=bool))
+            | (np.isfinite(qp.x_upper) if qp.x_upper is not None else np.zeros(n, dtype=bool))
+        )
+        built: list[tuple[FloatArray, FloatArray]] = []
+
+        def factors() -> tuple[FloatArray, FloatArray]:
+            if not built:  # once per update (the relaxed retry asks again)
+                built.append(self._least_distance_factors(n, n0, L21T, L22, box))
+            return built[0]
+
+        return LeastDistanceForm(x_u=x_u, factors=factors)
+
+    def _least_distance_factors(
+        self, n: int, n0: int, L21T: FloatArray, L22: FloatArray, box: npt.NDArray[np.intp]
+    ) -> tuple[FloatArray, FloatArray]:
+        """U and W of `_least_distance` (see there), in buffers re-used across updates."""
+        nA = n - n0
+        if self._ld_U11 is None:
+            assert self._ld_L11 is not None
+            U11 = np.zeros((0, 0))
+            if nA:
                 # L11^-T as the inverse of the upper factor L11' (LAPACK's upper trtri is
                 # 25 % faster here than the lower one: 66 vs 89 us at n = 120).
-                U11_F, info = _trtri(L11.T, lower=0)
-                if info != 0:
-                    return None
-                U11_new = np.ascontiguousarray(U11_F)
-            self._ld_block, self._ld_U11 = A.copy(), U11_new
+                U11_F, info = _trtri(self._ld_L11.T, lower=0)
+                # The diagonal of a Cholesky factor is positive: trtri cannot fail.
+                assert info == 0
+                U11 = np.ascontiguousarray(U11_F)
+            self._ld_U11 = U11
         U11 = self._ld_U11
-        assert U11 is not None
-        x_lo = qp.x_lower if qp.x_lower is not None else np.full(n, -np.inf)
-        x_hi = qp.x_upper if qp.x_upper is not None else np.full(n, np.inf)
-        box = np.flatnonzero(np.isfinite(x_lo) | np.isfinite(x_hi))
         n_fs, R, n_b = n // 5, self._rows.shape[0], box.shape[0]
         bufs = self._ld_buffers.get((n, n_b))
-        fresh = bufs is None
         if bufs is None:
-            U = np.zeros((n, n))
-            U[:nA, :nA] = U11
-            bufs = (U, np.zeros((n_b + n_fs * R, n)))
+            bufs = _LdBuffers(np.zeros((n, n)), np.zeros((n_b + n_fs * R, n)))
+            bufs.U[:nA, :nA] = U11
             self._ld_buffers[(n, n_b)] = bufs
-        U, W = bufs
+        U, W = bufs.U, bufs.W
         if n0:
-            L21 = H[nA:, :nA] @ U11
-            L22, info = _potrf(H[nA:, nA:] - L21 @ L21.T, lower=1, clean=1, overwrite_a=0)
-            if info != 0:
-                return None
             U22, info = _trtri(L22.T, lower=0)
-            if info != 0:
-                return None
-            U[:nA, nA:] = -(U11 @ (L21.T @ U22))
+            assert info == 0
+            U[:nA, nA:] = -(U11 @ (L21T @ U22))
             U[nA:, nA:] = U22
         # W = [U[box]; C U]. Columns :nA of U, hence of W, are U11's and zeros: they change
-        # only with the block (the buffers are then new), so an update rewrites step 0's
+        # only with the block (the buffers are then new), so later updates rewrite step 0's
         # columns only.
-        cols = slice(0, n) if fresh else slice(nA, n)
+        cols = slice(nA, n) if bufs.left_done else slice(0, n)
         W[:n_b, cols] = U[box, cols]
         W_rows = W[n_b:].reshape(n_fs, R, n)
         W_rows[:, :, cols] = self._rows @ U[:, cols].reshape(n_fs, 5, -1)
-        return LeastDistanceForm(U=U, W=W)
+        bufs.left_done = True
+        return U, W
 
     def _shift(self, inp: MpcInput) -> int:
         """Whole MPC steps elapsed since the previous update (from ``MpcInput.t``)."""

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Final, TypeAlias
 
@@ -390,19 +391,20 @@ def constraint_id(m: int, n: int, row: npt.ArrayLike, upper: npt.ArrayLike) -> n
 class LeastDistanceForm:
     """A dense QP without equalities in least-distance form, for daqp.
 
-    With a square factor ``U`` (n, n) of the inverse Hessian, H^-1 = U U' (e.g. L^-T for
-    H = L L'), and x = x_u + U y, where x_u = -H^-1 g is the unconstrained minimiser, the QP
-    is min 1/2 |y|^2 subject to the QP's bounds, shifted by x_u, on the rows of
-    ``W`` (n_b + n_in, n): U[box_index] (the box on x) above C U, where ``box_index`` are the
-    n_b variables with a finite lower or upper bound, in increasing order. That is DAQP's own
-    internal form: it reaches it with an O(n^3) transformation in plain C (2.5 ms at
-    n = 200), which a caller that knows the structure of its problem (cached factor blocks,
-    a block-diagonal C) computes far faster. The multipliers of W's rows are the QP's (the
-    same constraints, in y). Neither array is kept after the solve.
+    ``x_u`` (n,) is the unconstrained minimiser -H^-1 g. With a square factor U (n, n) of
+    the inverse Hessian, H^-1 = U U' (e.g. L^-T for H = L L'), and x = x_u + U y, the QP is
+    min 1/2 |y|^2 subject to the QP's bounds, shifted by x_u, on the rows of
+    W (n_b + n_in, n): U[box_index] (the box on x) above C U, where ``box_index`` are the n_b
+    variables with a finite lower or upper bound, in increasing order. ``factors()`` returns
+    (U, W); it is called only when x_u violates a bound, since they cost more than x_u. That
+    is DAQP's own internal form: it reaches it with an O(n^3) transformation in plain C
+    (2.5 ms at n = 200), which a caller that knows the structure of its problem (cached
+    factor blocks, a block-diagonal C) computes far faster. The multipliers of W's rows are
+    the QP's (the same constraints, in y). No array is kept after the solve.
     """
 
-    U: FloatArray
-    W: FloatArray
+    x_u: FloatArray
+    factors: Callable[[], tuple[FloatArray, FloatArray]]
 
 
 class QpSolver:
@@ -810,7 +812,6 @@ class QpSolver:
     ) -> QpSolution:
         s = self.settings
         n, m = p.n, p.n_in
-        U, W = form.U, form.W
         box = np.zeros(0, dtype=np.intp)
         lo_parts: list[FloatArray] = []
         hi_parts: list[FloatArray] = []
@@ -824,13 +825,9 @@ class QpSolver:
             lo_parts.append(_inf_fill(p.l, m, -1.0))
             hi_parts.append(_inf_fill(p.u, m, 1.0))
         n_b = box.shape[0]
-        if U.shape != (n, n) or W.shape != (n_b + m, n):
-            raise ValueError(
-                f"LeastDistanceForm: U {U.shape}, W {W.shape}; expected ({n}, {n}) and "
-                f"({n_b + m}, {n})"
-            )
-        x_u = U @ (U.T @ p.g)
-        np.negative(x_u, out=x_u)
+        x_u = form.x_u
+        if x_u.shape != (n,):
+            raise ValueError(f"LeastDistanceForm.x_u has shape {x_u.shape}, expected ({n},)")
         # Bounds on W y: the QP's bounds minus the rows' values at x_u.
         at_xu = np.empty(n_b + m)
         at_xu[:n_b] = x_u[box]
@@ -843,6 +840,12 @@ class QpSolver:
         if viol <= s.eps_abs:
             # The unconstrained minimiser meets every bound: DAQP is not needed.
             return self._least_distance_solution(p, t0, x_u, "solved", 0, 0.0, viol, z_in, z_box)
+        U, W = form.factors()
+        if U.shape != (n, n) or W.shape != (n_b + m, n):
+            raise ValueError(
+                f"LeastDistanceForm: U {U.shape}, W {W.shape}; expected ({n}, {n}) and "
+                f"({n_b + m}, {n})"
+            )
         sense = np.zeros(n_b + m, dtype=np.intc)
         keep_state = s.warm_start and hint is None and self._has_result
         if s.warm_start and hint is not None:
