@@ -71,7 +71,11 @@ def main() -> None:
         if held:
             held_masses.append(float(mass))
         fall_t = metrics.get("fall_time")
-        notes = [] if lifted else [f"block not lifted (on {block.get('on')})"]
+        notes = []
+        if not metrics.get("completed"):
+            notes.append("a task goal was never met (the pick did not finish)")
+        if block.get("on") is not None:
+            notes.append(f"block ends on the {block['on']}")
         if clips:
             notes.append(f"{clips} torque clips, {metrics.get('wbc_failures', 0)} WBC failures")
         if row["error"]:
