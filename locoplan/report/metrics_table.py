@@ -31,7 +31,8 @@ def metrics_table(m: Mapping[str, Any]) -> Table:
         ("yaw difference pick->drop", _fmt(m["yaw_difference_deg"], " deg")),
         (
             "peak torque ratio",
-            f"{m['peak_torque_ratio']:.2f} ({m.get('peak_torque_joint', '?')})",
+            f"{m['peak_torque_ratio']:.2f} ({m.get('peak_torque_joint', '?')}); "
+            f"commanded {m.get('peak_commanded_torque_ratio', 0.0):.2f}",
         ),
         ("torque clips (last guard)", _fmt(m.get("torque_clips", 0))),
         ("final base", f"{m['final_base']['position']}  yaw {m['final_base']['yaw_deg']} deg"),

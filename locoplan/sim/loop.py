@@ -76,6 +76,8 @@ class RunRecord:
     grasp_failures: dict[str, float] = field(default_factory=dict)
     held_at_end: set[str] = field(default_factory=set)
     n_clipped: int = 0
+    # max over ticks and joints of |commanded tau| / limit, before the last-guard clip
+    peak_commanded_ratio: float = 0.0
     n_mpc_fallbacks: int = 0
     n_wbc_failures: int = 0
     fell: bool = False
@@ -257,6 +259,9 @@ class ClosedLoop:
                         if not out.wbc.ok:
                             rec.n_wbc_failures += 1
                 rec.n_clipped += out.n_clipped
+                rec.peak_commanded_ratio = max(
+                    rec.peak_commanded_ratio, float(np.max(np.abs(out.tau) / rec.torque_limits))
+                )
                 for kind, fields in self.grasp.update(t, be.data):
                     rec.grasp_events.append((t, kind, str(fields["object"])))
                     if kind == "grasp_failed":

@@ -256,6 +256,7 @@ def compute_metrics(
             None if (d := yaw_difference_deg(t, yaw, goals)) is None or not t.size else round(d, 2)
         ),
         "peak_torque_ratio": round(ratio, 4),
+        "peak_commanded_torque_ratio": round(rec.peak_commanded_ratio, 4),
         "peak_torque_joint": joint,
         "peak_torque": peaks,
         "final_base": {
