@@ -9,10 +9,11 @@ applied, with a small random disturbance force. Three scenarios: standing (both 
 stepping in place (0.4 s gait, 0.05 s double support, 0.15 s swing per foot) and standing
 with 5 kg held 0.3 m ahead (CoP bounds often active). Every combination then replays the
 same recorded inputs in order, on a fresh controller, so solver re-use and caches behave as
-in the loop. Columns: build (outside the solver, the least-distance form included) and solve
-time, their total (wall and thread CPU time; the CPU time is the steadier figure on a shared
-machine), iterations median/max, the share of updates whose unconstrained minimiser met
-every bound (daqp not run) and the fallbacks taken.
+in the loop. Columns: build (outside the solver: for daqp the block factorisation and x_u
+included; U and W of the least-distance form, built only when x_u violates a bound, count as
+solve) and solve time, their total (wall and thread CPU time; the CPU time is the steadier
+figure on a shared machine), iterations median/max, the share of updates whose
+unconstrained minimiser met every bound (daqp not run) and the fallbacks taken.
 """
 
 from __future__ import annotations
