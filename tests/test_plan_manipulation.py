@@ -22,8 +22,9 @@ def test_package_transfer_schedules_sigma_h_and_sigma_e() -> None:
     drop = next(t for t in plan.tasks if t.action == "drop")
     (hold,) = plan.holds
     assert hold.object == "package" and hold.mass == 3.0 and hold.hands == ("L", "R")
-    assert hold.grasp == pytest.approx(pick.at_fraction(k.PICK_CONTACT), abs=TIME_TOL)
-    assert hold.lift == pytest.approx(pick.at_fraction(k.PICK_LIFTOFF), abs=TIME_TOL)
+    # the package is carried through the second turn: the pick uses PICK_CARRIED's phases
+    assert hold.grasp == pytest.approx(pick.at_fraction(k.PICK_CARRIED.contact), abs=TIME_TOL)
+    assert hold.lift == pytest.approx(pick.at_fraction(k.PICK_CARRIED.liftoff), abs=TIME_TOL)
     assert hold.release == pytest.approx(drop.at_fraction(k.DROP_RELEASE), abs=TIME_TOL)
     assert hold.release_kind == "drop" and drop.hands == "both"
     for hand in ("L", "R"):
@@ -62,21 +63,27 @@ def test_drop_onto_conveyor_is_fully_supported_nearest_the_robot() -> None:
 def test_object_positions_follow_the_hands_while_held() -> None:
     plan = compile_plan(repo_scenario("package-transfer"))
     (hold,) = plan.holds
-    times = np.array([0.0, hold.lift, 0.5 * (hold.lift + hold.release), hold.release])
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    drop = next(t for t in plan.tasks if t.action == "drop")
+    settle = next(g for g in plan.manipulation.tracks[0].segments if g.label == "settle")
+    assert settle.t0 == pick.end and settle.t1 <= drop.start
+    times = np.array([0.0, hold.lift, pick.end, settle.t1, hold.release])
     ref = plan.object_reference(times)
     trunk = plan.trunk_reference(times)
-    assert ref.held.tolist() == [False, True, True, False]
+    assert ref.held.tolist() == [False, True, True, True, False]
     assert ref.position[0] == pytest.approx(trunk.position[0])  # r_e = 0 when not held
     # The reference is where the hands hold the object (the mean of the hand targets): the
     # grip point, hold.grip_height above the box's centre (a vertical offset does not change
     # the moment of the object's weight). At lift-off it is still on the table.
     up = np.array([0.0, 0.0, hold.grip_height])
     assert ref.position[1] == pytest.approx(np.array([0.0, 0.35, 0.545]) + up, abs=1e-9)
-    # carried: at the carry pose in the trunk frame (as far ahead as it was picked, 0.35 m)
-    yaw = trunk.yaw[2]
-    fwd = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-    expected = trunk.position[2] + 0.35 * fwd + np.array([0, 0, k.CARRY_HEIGHT]) + up
-    assert ref.position[2] == pytest.approx(expected, abs=1e-9)
+    # carried in the trunk frame: at the pick's end as far ahead as it was picked (0.35 m),
+    # then brought in to CARRY_FORWARD while the hands are free
+    for n, ahead in ((2, 0.35), (3, k.CARRY_FORWARD)):
+        yaw = trunk.yaw[n]
+        fwd = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+        expected = trunk.position[n] + ahead * fwd + np.array([0, 0, k.CARRY_HEIGHT]) + up
+        assert ref.position[n] == pytest.approx(expected, abs=1e-9)
 
 
 def test_throw_target_is_the_ballistic_landing_point() -> None:
@@ -190,3 +197,28 @@ def test_compiler_refuses_impossible_manipulation(tasks, message) -> None:
     scenario = type(scenario_from_text(SINGLE_HAND)).model_validate(base)
     with pytest.raises(PlanError, match=message):
         compile_plan(scenario)
+
+
+@pytest.mark.parametrize(
+    ("name", "moving"),
+    [
+        ("package-transfer", True),
+        ("pick-walk-drop", True),
+        ("throw", True),
+        ("standing-load", False),
+        ("model-comparison", False),
+    ],
+)
+def test_pick_phases_and_grip_depend_on_carrying_while_moving(name: str, moving: bool) -> None:
+    scenario = repo_scenario(name)
+    plan = compile_plan(scenario)
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    (hold,) = plan.holds
+    phases = k.PICK_CARRIED if moving else k.PICK_STANDING
+    assert hold.grasp == pytest.approx(pick.at_fraction(phases.contact), abs=TIME_TOL)
+    assert hold.lift == pytest.approx(pick.at_fraction(phases.liftoff), abs=TIME_TOL)
+    obj = scenario.objects[hold.object]
+    # boxes carried while the robot moves hang from a grip above their centre; spheres and
+    # boxes held standing are gripped at the centre
+    expected = k.GRASP_ABOVE_CENTRE if moving and obj.shape == "box" else 0.0
+    assert hold.grip_height == expected

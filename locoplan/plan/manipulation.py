@@ -126,7 +126,7 @@ def default_waypoint(hand: int) -> HandWaypoint:
 
 
 def grip_height(obj: ObjectSpec) -> float:
-    """How far above its centre (m) a box carried through a walk or turn is gripped:
+    """How far above its centre (m) a box carried through a walk, turn or steps is gripped:
     GRASP_ABOVE_CENTRE (at most up to HAND_RADIUS + GRASP_TOP_MARGIN below its top). Two point
     contacts leave the box free to turn about the line through them, with nothing to damp it:
     gripped at its centre, one knock (lift-off, a step) sets it turning for good; gripped
@@ -214,17 +214,30 @@ class _Builder:
                 )
 
     def carried_while_moving(self, pick: PlannedTask) -> bool:
-        """Whether the robot walks or turns while it holds what `pick` picks up (from the
-        pick's start to the first drop or throw of that object, or the end)."""
+        """Whether the robot walks, turns or steps while it holds what `pick` picks up (from
+        the pick's start to the first drop or throw of that object, or the end)."""
         until = math.inf
         for t in self.tasks:
             if t.action in ("drop", "throw") and t.object == pick.object and t.start >= pick.start:
                 until = t.end
                 break
         return any(
-            t.action in ("walk", "turn") and t.start < until and t.end > pick.start
+            t.action in ("walk", "turn", "step") and t.start < until and t.end > pick.start
             for t in self.tasks
         )
+
+    def next_use(self, pick: PlannedTask) -> float:
+        """Start (s) of the first task after `pick` that drops or throws its object or uses
+        one of its hands (inf if none)."""
+        hands = set(_HANDS_OF[pick.hands or "both"])
+        for t in self.tasks:
+            if t.start < pick.end - 1e-9 or t.index == pick.index:
+                continue
+            if t.action in ("drop", "throw") and t.object == pick.object:
+                return t.start
+            if t.action == "pick" and hands & set(_HANDS_OF[t.hands or "both"]):
+                return t.start
+        return math.inf
 
     def free_time(self, h: int) -> float:
         """When the hand's last planned motion ends (s); 0 before any."""
@@ -321,24 +334,29 @@ class _Builder:
         self.check_free(task, hands)
         obj = self.scenario.objects[name]
         ox, oy, oz, oyaw = self.state[name]
-        t_reach = task.at_fraction(k.PICK_REACH_END)
-        t_contact = task.at_fraction(k.PICK_CONTACT)
-        t_lift = task.at_fraction(k.PICK_LIFTOFF)
-        t_raise = task.at_fraction(k.PICK_RAISE_END)
+        moving = self.carried_while_moving(task)
+        phases = k.PICK_CARRIED if moving else k.PICK_STANDING
+        t_reach = task.at_fraction(phases.reach_end)
+        t_contact = task.at_fraction(phases.contact)
+        t_lift = task.at_fraction(phases.liftoff)
+        t_raise = task.at_fraction(phases.raise_end)
         rx, ry, ryaw, *_ = self.trunk.pose_at(t_contact)
         ax, ay = approach_direction(rx, ry, ox, oy, ryaw)
         lx, ly = -ay, ax
         half = support_half_width(obj, oyaw, lx, ly)
         obstacles = self.obstacles()
-        lift = grip_height(obj) if self.carried_while_moving(task) else 0.0
+        lift = grip_height(obj) if moving else 0.0
         gz = oz + lift
         forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
+        # Then, while the hands have nothing else to do, the object comes in to CARRY_FORWARD
+        # slowly enough not to set it swinging (closer is lighter to balance and to turn with).
+        t_settle = min(task.end + k.CARRY_SETTLE_TIME, self.next_use(task))
         for h in hands:
             side = _SIDE[h]
             pre = _beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
             touch = _beside((ox, oy, gz), side * (half + k.HAND_RADIUS), lx, ly)
             grip = _beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
-            raised = (grip[0], grip[1], gz + k.PICK_RAISE_HEIGHT)
+            raised = (grip[0], grip[1], gz + phases.raise_height)
             carry = (forward, side * (half - k.GRASP_SQUEEZE), k.CARRY_HEIGHT + lift)
             w_pre = HandWaypoint(pre, "world")
             w_touch = HandWaypoint(touch, "world")
@@ -347,14 +365,21 @@ class _Builder:
             w_carry = HandWaypoint(carry, "trunk")
             i = task.index
             tuck_y = max(k.HAND_TUCK_IN_TRUNK[1], half + k.GRASP_CLEARANCE)
-            for seg in self.approach(h, task, w_pre, t_reach, tuck_y, obstacles):
+            approach = self.approach(h, task, w_pre, t_reach, tuck_y, obstacles)
+            for seg in approach:
                 self.add(h, seg)
             self.add(h, HandSegment(t_reach, t_contact, w_pre, w_touch, i, "squeeze"))
             self.add(h, HandSegment(t_contact, t_lift, w_touch, w_grip, i, "grip"))
             self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
             self.add(h, HandSegment(t_raise, task.end, w_raised, w_carry, i, "carry"))
+            t_end = task.end
+            settled = (k.CARRY_FORWARD, carry[1], carry[2])
+            if t_settle - task.end >= k.CARRY_SETTLE_MIN and abs(forward - k.CARRY_FORWARD) > 1e-3:
+                w_settled = HandWaypoint(settled, "trunk")
+                self.add(h, HandSegment(task.end, t_settle, w_carry, w_settled, i, "settle"))
+                t_end = t_settle
             self.hand_holds[h] = name
-            self.active[h].append((min(task.start, self.segments[h][0].t0), task.end))
+            self.active[h].append((min(task.start, approach[0].t0), t_end))
         self.open_holds[name] = _OpenHold(
             name, obj.mass, hands, task, t_contact, t_lift, half, oyaw - math.atan2(ay, ax), lift
         )
