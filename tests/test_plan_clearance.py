@@ -17,8 +17,8 @@ from locoplan.plan.clearance import (
     object_obstacle,
     track_clearance,
 )
+from locoplan.plan.hand_paths import default_waypoint
 from locoplan.plan.hands import HandSegment, HandWaypoint, make_track
-from locoplan.plan.manipulation import default_waypoint
 
 EXACT = 1e-12  # closed-form distances, float rounding only
 

@@ -1,19 +1,26 @@
 """Manipulation plan: hand target tracks, hand contacts (sigma_H), object holds (sigma_e).
 
-Phase fractions and poses are the named constants of `locoplan.plan.constants`. Geometry:
+Phase fractions and poses are the named constants of `locoplan.plan.constants`; the hand paths
+themselves (approach, retreat, throw line) are `locoplan.plan.hand_paths`. Geometry:
 
 - pick: the approach direction is horizontal, from the robot's planned position at the
   contact instant to the object's centre; the grasp axis is across it (the left hand on the
-  left of the approach). Pre-grasp points lie GRASP_CLEARANCE outside the object's sides at its
-  centre height, contact points GRASP_SQUEEZE inside; after the grip the object is raised
-  straight up, then brought to the carry pose (centre at (CARRY_FORWARD, 0, CARRY_HEIGHT) in
-  trunk, hands at +-(half width - GRASP_SQUEEZE) along the trunk's y).
+  left of the approach). Pre-grasp points lie GRASP_CLEARANCE outside the object's sides,
+  reached without sweeping through the scene (tucking the hands in first if the trunk turns or
+  walks towards the object); the hands close until their spheres touch the sides, then press
+  GRASP_SQUEEZE in. A box carried through a walk, turn or steps is gripped above its centre
+  (it hangs level from the two point grips) and picked with PICK_CARRIED's phases, otherwise
+  at its centre with PICK_STANDING's. After the grip the object is raised straight up, then
+  brought up to CARRY_HEIGHT in trunk as far ahead as it was picked, and settles in to
+  CARRY_FORWARD while the hands are free.
 - drop: the object's centre goes to `at`, or onto the fixture's top at the fully supported
   point nearest the robot's planned position at the release instant; the grasp axis is across
-  the robot-to-target direction.
-- throw: the hands accelerate along a straight line in trunk from a wind-up point to a release
-  point THROW_RELEASE_OFFSET beyond the carry pose along the throw direction, reaching the
-  commanded velocity (relative to the trunk, trunk axes) at the release instant.
+  the robot-to-target direction. The object hovers above the place point (moving with the
+  trunk), is lowered onto it (world), released; the hands open (wider on the side a conveyor
+  carries the object to) and retreat to the tucked pose clear of it.
+- throw: the hands push the object along a straight world line from a wind-up point,
+  reaching the commanded velocity (relative to the planned trunk motion, trunk axes) before
+  the release and holding it there, stop squeezing, let go and open while they stop.
 """
 
 from __future__ import annotations
@@ -23,13 +30,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from locoplan.plan import constants as k
-from locoplan.plan.clearance import (
-    Clearance,
-    Obstacle,
-    fixture_obstacle,
-    object_obstacle,
-    track_clearance,
-)
+from locoplan.plan.clearance import Obstacle, fixture_obstacle, object_obstacle
 from locoplan.plan.errors import PlanError
 from locoplan.plan.events import PlanEvent
 from locoplan.plan.geometry import (
@@ -39,14 +40,25 @@ from locoplan.plan.geometry import (
     place_on_fixture,
     support_half_width,
 )
+from locoplan.plan.hand_paths import (
+    HAND_NAMES,
+    SIDE,
+    along,
+    approach_segments,
+    beside,
+    carry_forward,
+    default_waypoint,
+    grip_height,
+    retreat_segments,
+    throw_line,
+    world_to_trunk,
+)
 from locoplan.plan.hands import HandSegment, HandTrack, HandWaypoint, Vec3, make_track
 from locoplan.plan.intervals import Intervals, merge_intervals
 from locoplan.plan.tasks import PlannedTask
 from locoplan.plan.trunk import TrunkPath
-from locoplan.scenario.model import ObjectSpec, Scenario
+from locoplan.scenario.model import Scenario
 
-HAND_NAMES: tuple[str, str] = ("L", "R")
-_SIDE = (1.0, -1.0)  # +y for the left hand, -y for the right
 _HANDS_OF = {"both": (0, 1), "left": (0,), "right": (1,)}
 
 
@@ -117,47 +129,6 @@ class ManipulationPlan:
     held_intervals: Intervals
     targets: dict[str, ObjectTarget]
     events: tuple[PlanEvent, ...]
-
-
-def default_waypoint(hand: int) -> HandWaypoint:
-    """The default (carry-ready) hand pose in trunk."""
-    x, y, z = k.HAND_DEFAULT_IN_TRUNK
-    return HandWaypoint((x, _SIDE[hand] * y, z), "trunk")
-
-
-def grip_height(obj: ObjectSpec) -> float:
-    """How far above its centre (m) a box carried through a walk, turn or steps is gripped:
-    GRASP_ABOVE_CENTRE (at most up to HAND_RADIUS + GRASP_TOP_MARGIN below its top). Two point
-    contacts leave the box free to turn about the line through them, with nothing to damp it:
-    gripped at its centre, one knock (lift-off, a step) sets it turning for good; gripped
-    above, it hangs level like a pendulum. Held standing still, the box is gripped at its
-    centre (no pendulum for the hands' own motion to excite; this keeps the 14 kg hold within
-    its thin torque margins). A sphere is always gripped at its equator."""
-    if obj.shape == "sphere":
-        return 0.0
-    top = half_extents(obj)[2] - k.HAND_RADIUS - k.GRASP_TOP_MARGIN
-    return max(0.0, min(k.GRASP_ABOVE_CENTRE, top))
-
-
-def carry_forward(
-    pose: tuple[float, float, float, float, float, float], ox: float, oy: float
-) -> float:
-    """How far ahead of the trunk (m) a picked object is carried: where it was picked, seen
-    from the planned trunk `pose` (x, y, yaw, ...) at the pick's end, within CARRY_FORWARD +-
-    CARRY_FORWARD_RANGE. Two point grips leave the object free to swing about the grip axis
-    (a pendulum with nothing to damp it), so the pick does not pull it in horizontally in a
-    hurry; the next task (drop, throw) moves it over its longer first phase."""
-    x, y, yaw = pose[0], pose[1], pose[2]
-    ahead = math.cos(yaw) * (ox - x) + math.sin(yaw) * (oy - y)
-    lo, hi = k.CARRY_FORWARD - k.CARRY_FORWARD_RANGE, k.CARRY_FORWARD + k.CARRY_FORWARD_RANGE
-    return min(max(ahead, lo), hi)
-
-
-def tuck_waypoint(hand: int, width: float) -> HandWaypoint:
-    """The tucked hand pose in trunk (HAND_TUCK_IN_TRUNK), `width` (m) off the trunk's
-    centre line."""
-    x, _, z = k.HAND_TUCK_IN_TRUNK
-    return HandWaypoint((x, _SIDE[hand] * width, z), "trunk")
 
 
 @dataclass
@@ -239,10 +210,6 @@ class _Builder:
                 return t.start
         return math.inf
 
-    def free_time(self, h: int) -> float:
-        """When the hand's last planned motion ends (s); 0 before any."""
-        return self.segments[h][-1].t1 if self.segments[h] else 0.0
-
     def obstacles(self) -> tuple[Obstacle, ...]:
         """Fixtures and every object not held now, where the plan has put them so far."""
         out = [fixture_obstacle(n, f) for n, f in self.scenario.fixtures.items()]
@@ -253,69 +220,6 @@ class _Builder:
             drift, t_ref = self.drift.get(name, ((0.0, 0.0), 0.0))
             out.append(object_obstacle(name, obj, (x, y, z), yaw, drift, t_ref))
         return tuple(out)
-
-    def clearance(
-        self,
-        h: int,
-        extra: list[HandSegment],
-        t0: float,
-        t1: float,
-        obstacles: tuple[Obstacle, ...],
-        threshold: float,
-    ) -> Clearance:
-        """Clearance on [t0, t1] of the hand's track with the candidate segments appended."""
-        track = make_track(HAND_NAMES[h], default_waypoint(h), self.segments[h] + extra)
-        return track_clearance(track, self.trunk, obstacles, t0, t1, threshold)
-
-    def approach(
-        self,
-        h: int,
-        task: PlannedTask,
-        target: HandWaypoint,
-        t_end: float,
-        tuck_y: float,
-        obstacles: tuple[Obstacle, ...],
-    ) -> list[HandSegment]:
-        """Segments that bring the hand from where it is to `target` at t_end (s).
-
-        Directly (a straight blend over the task's first phase) when that keeps
-        APPROACH_CLEARANCE from every obstacle along the planned trunk path (with the yaw off
-        by as much as it may be); otherwise the hand first tucks in (close to the body and
-        `tuck_y` wide, in trunk) before the direct path would collide, waits there while the
-        trunk turns or walks, and reaches out at the earliest time from which the rest of the
-        path is clear. A hand that starts closer than APPROACH_CLEARANCE (resting beside the
-        object) only has to get no closer (within APPROACH_SLACK). If no tucked path is clear,
-        the one with the largest clearance wins.
-        """
-        i = task.index
-        cur = self.current(h)
-        t_free = self.free_time(h)
-        direct = [HandSegment(task.start, t_end, cur, target, i, "reach")]
-        start_gap = self.clearance(h, direct, t_free, t_free, obstacles, -math.inf).minimum
-        threshold = min(k.APPROACH_CLEARANCE, start_gap - k.APPROACH_SLACK)
-        c_direct = self.clearance(h, direct, t_free, t_end, obstacles, threshold)
-        if c_direct.first_below is None:
-            return direct
-        t_hit = c_direct.first_below
-        t_tuck1 = min(
-            max(t_hit - k.TUCK_LEAD, t_free + k.TUCK_DURATION), t_end - k.REACH_MIN_DURATION
-        )
-        t_tuck0 = max(t_free, t_tuck1 - k.TUCK_DURATION)
-        if t_tuck1 <= t_tuck0:
-            return direct
-        tuck = tuck_waypoint(h, tuck_y)
-        w_tuck = HandSegment(t_tuck0, t_tuck1, cur, tuck, i, "tuck")
-        best, best_gap = direct, c_direct.minimum
-        n = int((t_end - k.REACH_MIN_DURATION - t_tuck1) / k.REACH_START_STEP + 1e-9)
-        for j in range(n + 1):
-            t_r = t_tuck1 + j * k.REACH_START_STEP
-            cand = [w_tuck, HandSegment(t_r, t_end, tuck, target, i, "reach")]
-            c = self.clearance(h, cand, t_tuck0, t_end, obstacles, threshold)
-            if c.first_below is None:
-                return cand
-            if c.minimum > best_gap:
-                best, best_gap = cand, c.minimum
-        return best
 
     # --- pick ------------------------------------------------------------------------------
     def pick(self, task: PlannedTask) -> None:
@@ -352,10 +256,10 @@ class _Builder:
         # slowly enough not to set it swinging (closer is lighter to balance and to turn with).
         t_settle = min(task.end + k.CARRY_SETTLE_TIME, self.next_use(task))
         for h in hands:
-            side = _SIDE[h]
-            pre = _beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
-            touch = _beside((ox, oy, gz), side * (half + k.HAND_RADIUS), lx, ly)
-            grip = _beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
+            side = SIDE[h]
+            pre = beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
+            touch = beside((ox, oy, gz), side * (half + k.HAND_RADIUS), lx, ly)
+            grip = beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
             raised = (grip[0], grip[1], gz + phases.raise_height)
             carry = (forward, side * (half - k.GRASP_SQUEEZE), k.CARRY_HEIGHT + lift)
             w_pre = HandWaypoint(pre, "world")
@@ -365,7 +269,9 @@ class _Builder:
             w_carry = HandWaypoint(carry, "trunk")
             i = task.index
             tuck_y = max(k.HAND_TUCK_IN_TRUNK[1], half + k.GRASP_CLEARANCE)
-            approach = self.approach(h, task, w_pre, t_reach, tuck_y, obstacles)
+            approach = approach_segments(
+                h, self.segments[h], task.start, i, w_pre, t_reach, tuck_y, self.trunk, obstacles
+            )
             for seg in approach:
                 self.add(h, seg)
             self.add(h, HandSegment(t_reach, t_contact, w_pre, w_touch, i, "squeeze"))
@@ -465,27 +371,29 @@ class _Builder:
         obstacles = (*self.obstacles(), placed)
         i = task.index
         for h in hold.hands:
-            side = _SIDE[h]
+            side = SIDE[h]
             # A belt carries the released object towards one hand: that hand opens wider by
             # how far the object comes towards it before the drop ends.
             towards = max(0.0, side * (drift[0] * lx + drift[1] * ly))
             width = half + k.GRASP_CLEARANCE + towards * (task.end - t_release)
             grip_at = (tx, ty, tz + hold.grip_height)
-            put = _beside(grip_at, side * (half - k.GRASP_SQUEEZE), lx, ly)
+            put = beside(grip_at, side * (half - k.GRASP_SQUEEZE), lx, ly)
             hover = (put[0], put[1], put[2] + k.DROP_HOVER_HEIGHT)
-            opened = _beside(grip_at, side * width, lx, ly)
-            back = _beside(opened, -(depth + k.GRASP_CLEARANCE), ax, ay)
+            opened = beside(grip_at, side * width, lx, ly)
+            back = beside(opened, -(depth + k.GRASP_CLEARANCE), ax, ay)
             w_put = HandWaypoint(put, "world")
             # The hover point moves with the trunk (where the plan has it at the hover's end):
             # while the robot still turns or walks, a world point would pull the hands (and
             # the load) hard against the trunk's lag; the lowering ends on the world point.
-            w_hover = HandWaypoint(_world_to_trunk(self.trunk, t_hover, hover), "trunk")
+            w_hover = HandWaypoint(world_to_trunk(self.trunk, t_hover, hover), "trunk")
             w_open = HandWaypoint(opened, "world")
             w_back = HandWaypoint(back, "world")
             self.add(h, HandSegment(task.start, t_hover, self.current(h), w_hover, i, "hover"))
             self.add(h, HandSegment(t_hover, t_release, w_hover, w_put, i, "lower"))
             self.add(h, HandSegment(t_release, t_open, w_put, w_open, i, "open"))
-            for seg in self.retreat(h, task, t_open, w_open, w_back, obstacles):
+            for seg in retreat_segments(
+                h, self.segments[h], i, t_open, task.end, w_open, w_back, self.trunk, obstacles
+            ):
                 self.add(h, seg)
         self._close_hold(hold, task, t_release, "drop")
         self.state[name] = (tx, ty, tz, obj_yaw)
@@ -493,89 +401,36 @@ class _Builder:
             self.drift[name] = (drift, t_release)
         self.targets[name] = ObjectTarget(name, "place", target, obj_yaw, task.onto, t_release)
 
-    def retreat(
-        self,
-        h: int,
-        task: PlannedTask,
-        t0: float,
-        opened: HandWaypoint,
-        back: HandWaypoint,
-        obstacles: tuple[Obstacle, ...],
-    ) -> list[HandSegment]:
-        """Segments from the opened hand at t0 (s) to the tucked pose at the task's end (the
-        default pose could rest beside, or inside, what was just put down). Straight when that
-        keeps APPROACH_CLEARANCE, otherwise first `back` along the object's side to behind its
-        near face (world), then in; the clearer of the two if neither is clear."""
-        i = task.index
-        t1 = task.end
-        tuck = tuck_waypoint(h, k.HAND_TUCK_IN_TRUNK[1])
-        direct = [HandSegment(t0, t1, opened, tuck, i, "retract")]
-        c_direct = self.clearance(h, direct, t0, t1, obstacles, k.APPROACH_CLEARANCE)
-        if c_direct.first_below is None:
-            return direct
-        t_back = t0 + k.DROP_BACK_SHARE * (t1 - t0)
-        via = [
-            HandSegment(t0, t_back, opened, back, i, "back"),
-            HandSegment(t_back, t1, back, tuck, i, "retract"),
-        ]
-        c_via = self.clearance(h, via, t0, t1, obstacles, k.APPROACH_CLEARANCE)
-        return via if c_via.minimum > c_direct.minimum else direct
-
     # --- throw -----------------------------------------------------------------------------
     def throw(self, task: PlannedTask) -> None:
         hold = self._release_hold(task, "throw")
         name = hold.obj
         obj = self.scenario.objects[name]
         vx, vy, vz = task.velocity or (0.0, 0.0, 0.0)
-        speed = math.sqrt(vx * vx + vy * vy + vz * vz)
-        u_body = (vx / speed, vy / speed, vz / speed) if speed > 1e-9 else (1.0, 0.0, 0.0)
         t_wind = task.at_fraction(k.THROW_WINDUP_END)
         t_cruise = task.at_fraction(k.THROW_ACCELERATE_END)
         t_release = task.at_fraction(k.THROW_RELEASE)
         t_follow = task.at_fraction(k.THROW_FOLLOW_END)
-        # The line is laid out in the world from the planned trunk pose at the release, so that
-        # the hands' world velocity there is the commanded one whatever the trunk does (it
-        # recoils as the load is pushed). From the rest at the wind-up point the quintic
-        # reaches the speed v after v T / 2 (accelerate), holds it for v T (cruise: the hands'
-        # tracking catches up) and comes back to rest after v T / 2 (follow-through).
-        bx, by, byaw, bvx, bvy, bwz = self.trunk.pose_at(t_release)
-        c, s = math.cos(byaw), math.sin(byaw)
-        bz = self.trunk.height
-
-        def to_world(q: Vec3) -> Vec3:
-            return (bx + c * q[0] - s * q[1], by + s * q[0] + c * q[1], bz + q[2])
-
-        u = (c * u_body[0] - s * u_body[1], s * u_body[0] + c * u_body[1], u_body[2])
-        lat = (-s, c, 0.0)  # the trunk's left, world
-        centre_stop = to_world(
-            _along((k.CARRY_FORWARD, 0.0, k.CARRY_HEIGHT), k.THROW_STOP_OFFSET, u_body)
-        )
-        v_cmd = speed * k.THROW_SPEED_GAIN
-        length_follow = v_cmd * (t_follow - t_release) / 2.0
-        length_cruise = v_cmd * (t_release - t_cruise)
-        length_acc = v_cmd * (t_cruise - t_wind) / 2.0
-        centre_rel = _along(centre_stop, -length_follow, u)
-        centre_cruise = _along(centre_rel, -length_cruise, u)
-        centre_wind = _along(centre_cruise, -length_acc, u)
-        vel = (u[0] * v_cmd, u[1] * v_cmd, u[2] * v_cmd)
+        line = throw_line(self.trunk, (vx, vy, vz), t_wind, t_cruise, t_release, t_follow)
+        lat, vel = line.lateral, line.velocity
         half = hold.half_width
         up = (0.0, 0.0, 1.0)
         centre_wind, centre_cruise, centre_rel, centre_stop = (
-            _along(q, hold.grip_height, up)
-            for q in (centre_wind, centre_cruise, centre_rel, centre_stop)
+            along(q, hold.grip_height, up)
+            for q in (line.wind, line.cruise, line.release, line.stop)
         )
         i = task.index
         for h in hold.hands:
-            side = _SIDE[h]
+            side = SIDE[h]
             grip = side * (half - k.GRASP_SQUEEZE)
             loose = side * (half + k.HAND_RADIUS)
             opened = side * (half + k.GRASP_CLEARANCE)
-            w_wind = HandWaypoint(_along(centre_wind, grip, lat), "world")
-            w_cruise = HandWaypoint(_along(centre_cruise, grip, lat), "world", vel)
+            w_wind = HandWaypoint(along(centre_wind, grip, lat), "world")
+            w_cruise = HandWaypoint(along(centre_cruise, grip, lat), "world", vel)
             # No squeeze at the release: the hands only touch the object, so nothing drags it
             # once the grasp lets go.
-            w_rel = HandWaypoint(_along(centre_rel, loose, lat), "world", vel)
-            w_stop = HandWaypoint(_along(centre_stop, opened, lat), "world")
+            w_rel = HandWaypoint(along(centre_rel, loose, lat), "world", vel)
+            w_stop = HandWaypoint(along(centre_stop, opened, lat), "world")
             self.add(h, HandSegment(task.start, t_wind, self.current(h), w_wind, i, "windup"))
             self.add(h, HandSegment(t_wind, t_cruise, w_wind, w_cruise, i, "accelerate"))
             self.add(h, HandSegment(t_cruise, t_release, w_cruise, w_rel, i, "cruise"))
@@ -584,7 +439,9 @@ class _Builder:
         self._close_hold(hold, task, t_release, "throw")
         # Planned release state of the object's centre: the line's release point and the
         # commanded velocity relative to the planned trunk motion, for its landing point.
-        p = _along(centre_rel, -hold.grip_height, up)
+        p = line.release
+        bx, by, byaw, bvx, bvy, bwz = self.trunk.pose_at(t_release)
+        c, s = math.cos(byaw), math.sin(byaw)
         rwx, rwy = p[0] - bx, p[1] - by
         v = (
             c * vx - s * vy + bvx - bwz * rwy,
@@ -647,24 +504,6 @@ class _Builder:
             targets=dict(sorted(self.targets.items())),
             events=tuple(self.events),
         )
-
-
-def _beside(p: Vec3, d: float, lx: float, ly: float) -> Vec3:
-    """p moved horizontally by d along the unit vector (lx, ly)."""
-    return (p[0] + d * lx, p[1] + d * ly, p[2])
-
-
-def _world_to_trunk(trunk: TrunkPath, t: float, p: Vec3) -> Vec3:
-    """The world point p (m) in the planned trunk frame at t (s)."""
-    x, y, yaw, *_ = trunk.pose_at(t)
-    c, s = math.cos(yaw), math.sin(yaw)
-    dx, dy = p[0] - x, p[1] - y
-    return (c * dx + s * dy, -s * dx + c * dy, p[2] - trunk.height)
-
-
-def _along(p: Vec3, d: float, u: Vec3) -> Vec3:
-    """p moved by d along the unit vector u."""
-    return (p[0] + d * u[0], p[1] + d * u[1], p[2] + d * u[2])
 
 
 def build_manipulation(

@@ -1,0 +1,228 @@
+"""Hand paths of manipulation: poses, the collision-checked approach and retreat, the throw
+line (pure functions over the planned trunk path; SI units, radians).
+
+Poses marked "in trunk" are relative to the trunk origin in the trunk's yaw-only frame; the
+sign of y flips for the right hand (hand index 0 = left, 1 = right). Every path that moves a
+hand towards or away from an object is checked with `locoplan.plan.clearance` against the
+scene along the planned trunk path, so that the hands do not sweep into what the robot turns
+or walks towards, nor knock what it has just put down.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from locoplan.plan import constants as k
+from locoplan.plan.clearance import Clearance, Obstacle, track_clearance
+from locoplan.plan.geometry import half_extents
+from locoplan.plan.hands import HandSegment, HandWaypoint, Vec3, make_track
+from locoplan.plan.trunk import TrunkPath
+from locoplan.scenario.model import ObjectSpec
+
+HAND_NAMES: tuple[str, str] = ("L", "R")
+SIDE = (1.0, -1.0)  # +y for the left hand, -y for the right
+
+
+def default_waypoint(hand: int) -> HandWaypoint:
+    """The default (carry-ready) hand pose in trunk."""
+    x, y, z = k.HAND_DEFAULT_IN_TRUNK
+    return HandWaypoint((x, SIDE[hand] * y, z), "trunk")
+
+
+def tuck_waypoint(hand: int, width: float) -> HandWaypoint:
+    """The tucked hand pose in trunk (HAND_TUCK_IN_TRUNK), `width` (m) off the trunk's
+    centre line."""
+    x, _, z = k.HAND_TUCK_IN_TRUNK
+    return HandWaypoint((x, SIDE[hand] * width, z), "trunk")
+
+
+def grip_height(obj: ObjectSpec) -> float:
+    """How far above its centre (m) a box carried through a walk, turn or steps is gripped:
+    GRASP_ABOVE_CENTRE (at most up to HAND_RADIUS + GRASP_TOP_MARGIN below its top). Two point
+    contacts leave the box free to turn about the line through them, with nothing to damp it:
+    gripped at its centre, one knock (lift-off, a step) sets it turning for good; gripped
+    above, it hangs level like a pendulum. Held standing still, the box is gripped at its
+    centre (no pendulum for the hands' own motion to excite; this keeps the 14 kg hold within
+    its thin torque margins). A sphere is always gripped at its equator."""
+    if obj.shape == "sphere":
+        return 0.0
+    top = half_extents(obj)[2] - k.HAND_RADIUS - k.GRASP_TOP_MARGIN
+    return max(0.0, min(k.GRASP_ABOVE_CENTRE, top))
+
+
+def carry_forward(
+    pose: tuple[float, float, float, float, float, float], ox: float, oy: float
+) -> float:
+    """How far ahead of the trunk (m) a picked object is carried at the pick's end: where it
+    was picked (centre (ox, oy), m), seen from the planned trunk `pose` (x, y, yaw, ...) at the
+    pick's end, within CARRY_FORWARD +- CARRY_FORWARD_RANGE. Two point grips leave the object
+    free to swing about the grip axis (a pendulum with nothing to damp it), so the pick does
+    not pull it in horizontally in a hurry; it settles in to CARRY_FORWARD afterwards."""
+    x, y, yaw = pose[0], pose[1], pose[2]
+    ahead = math.cos(yaw) * (ox - x) + math.sin(yaw) * (oy - y)
+    lo, hi = k.CARRY_FORWARD - k.CARRY_FORWARD_RANGE, k.CARRY_FORWARD + k.CARRY_FORWARD_RANGE
+    return min(max(ahead, lo), hi)
+
+
+def beside(p: Vec3, d: float, lx: float, ly: float) -> Vec3:
+    """p moved horizontally by d along the unit vector (lx, ly)."""
+    return (p[0] + d * lx, p[1] + d * ly, p[2])
+
+
+def along(p: Vec3, d: float, u: Vec3) -> Vec3:
+    """p moved by d along the unit vector u."""
+    return (p[0] + d * u[0], p[1] + d * u[1], p[2] + d * u[2])
+
+
+def world_to_trunk(trunk: TrunkPath, t: float, p: Vec3) -> Vec3:
+    """The world point p (m) in the planned trunk frame at t (s)."""
+    x, y, yaw, *_ = trunk.pose_at(t)
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy = p[0] - x, p[1] - y
+    return (c * dx + s * dy, -s * dx + c * dy, p[2] - trunk.height)
+
+
+def path_clearance(
+    hand: int,
+    done: list[HandSegment],
+    extra: list[HandSegment],
+    t0: float,
+    t1: float,
+    trunk: TrunkPath,
+    obstacles: tuple[Obstacle, ...],
+    threshold: float,
+) -> Clearance:
+    """Clearance on [t0, t1] (s) of the hand's track made of the segments `done` so far and
+    the candidate segments `extra`."""
+    track = make_track(HAND_NAMES[hand], default_waypoint(hand), done + extra)
+    return track_clearance(track, trunk, obstacles, t0, t1, threshold)
+
+
+def approach_segments(
+    hand: int,
+    done: list[HandSegment],
+    start: float,
+    task_index: int,
+    target: HandWaypoint,
+    t_end: float,
+    tuck_y: float,
+    trunk: TrunkPath,
+    obstacles: tuple[Obstacle, ...],
+) -> list[HandSegment]:
+    """Segments that bring the hand from where `done` leaves it to `target` at t_end (s).
+
+    Directly (a straight blend from `start`, s) when that keeps APPROACH_CLEARANCE from every
+    obstacle along the planned trunk path (with the yaw off by as much as it may be);
+    otherwise the hand first tucks in (close to the body and `tuck_y` wide, in trunk; possibly
+    before `start`, as soon as the hand is free) before the direct path would collide, waits
+    there while the trunk turns or walks, and reaches out at the earliest time from which the
+    rest of the path is clear. A hand that starts closer than APPROACH_CLEARANCE (resting
+    beside the object) only has to get no closer (within APPROACH_SLACK). If no tucked path is
+    clear, the one with the largest clearance wins.
+    """
+    cur = done[-1].end if done else default_waypoint(hand)
+    t_free = done[-1].t1 if done else 0.0
+
+    def gap(extra: list[HandSegment], t0: float, t1: float, threshold: float) -> Clearance:
+        return path_clearance(hand, done, extra, t0, t1, trunk, obstacles, threshold)
+
+    direct = [HandSegment(start, t_end, cur, target, task_index, "reach")]
+    threshold = min(
+        k.APPROACH_CLEARANCE, gap(direct, t_free, t_free, -math.inf).minimum - k.APPROACH_SLACK
+    )
+    c_direct = gap(direct, t_free, t_end, threshold)
+    if c_direct.first_below is None:
+        return direct
+    t_hit = c_direct.first_below
+    t_tuck1 = min(max(t_hit - k.TUCK_LEAD, t_free + k.TUCK_DURATION), t_end - k.REACH_MIN_DURATION)
+    t_tuck0 = max(t_free, t_tuck1 - k.TUCK_DURATION)
+    if t_tuck1 <= t_tuck0:
+        return direct
+    tuck = tuck_waypoint(hand, tuck_y)
+    w_tuck = HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")
+    best, best_gap = direct, c_direct.minimum
+    n = int((t_end - k.REACH_MIN_DURATION - t_tuck1) / k.REACH_START_STEP + 1e-9)
+    for j in range(n + 1):
+        t_r = t_tuck1 + j * k.REACH_START_STEP
+        cand = [w_tuck, HandSegment(t_r, t_end, tuck, target, task_index, "reach")]
+        c = gap(cand, t_tuck0, t_end, threshold)
+        if c.first_below is None:
+            return cand
+        if c.minimum > best_gap:
+            best, best_gap = cand, c.minimum
+    return best
+
+
+def retreat_segments(
+    hand: int,
+    done: list[HandSegment],
+    task_index: int,
+    t0: float,
+    t1: float,
+    opened: HandWaypoint,
+    back: HandWaypoint,
+    trunk: TrunkPath,
+    obstacles: tuple[Obstacle, ...],
+) -> list[HandSegment]:
+    """Segments from the opened hand at t0 (s) to the tucked pose at t1 (s) (the default pose
+    could rest beside, or inside, what was just put down). Straight when that keeps
+    APPROACH_CLEARANCE, otherwise first `back` along the object's side to behind its near
+    face (world), then in; the clearer of the two if neither is clear."""
+    tuck = tuck_waypoint(hand, k.HAND_TUCK_IN_TRUNK[1])
+    direct = [HandSegment(t0, t1, opened, tuck, task_index, "retract")]
+    c_direct = path_clearance(hand, done, direct, t0, t1, trunk, obstacles, k.APPROACH_CLEARANCE)
+    if c_direct.first_below is None:
+        return direct
+    t_back = t0 + k.DROP_BACK_SHARE * (t1 - t0)
+    via = [
+        HandSegment(t0, t_back, opened, back, task_index, "back"),
+        HandSegment(t_back, t1, back, tuck, task_index, "retract"),
+    ]
+    c_via = path_clearance(hand, done, via, t0, t1, trunk, obstacles, k.APPROACH_CLEARANCE)
+    return via if c_via.minimum > c_direct.minimum else direct
+
+
+@dataclass(frozen=True, slots=True)
+class ThrowLine:
+    """The straight line a throw pushes the object's centre along (world, m): at rest at
+    `wind`, at the throw velocity `velocity` (m/s, world) from `cruise` to `release`, at rest
+    again at `stop`; `lateral` is the trunk's left (world unit vector) at the release."""
+
+    wind: Vec3
+    cruise: Vec3
+    release: Vec3
+    stop: Vec3
+    velocity: Vec3
+    lateral: Vec3
+
+
+def throw_line(
+    trunk: TrunkPath,
+    velocity_body: tuple[float, float, float],
+    t_wind: float,
+    t_cruise: float,
+    t_release: float,
+    t_follow: float,
+) -> ThrowLine:
+    """The throw line for the commanded body-frame velocity (m/s) and phase times (s).
+
+    It is laid out in the world from the planned trunk pose at the release, so that the
+    hands' world velocity there is the commanded one whatever the trunk does (it recoils as
+    the load is pushed): it ends THROW_STOP_OFFSET beyond the carry pose along the throw
+    direction. From rest at the wind-up point the quintic reaches the speed v after
+    v T / 2 (accelerate), holds it for v T (cruise: the hands' tracking catches up) and comes
+    back to rest after v T / 2 (follow-through)."""
+    vx, vy, vz = velocity_body
+    speed = math.sqrt(vx * vx + vy * vy + vz * vz)
+    u_body = (vx / speed, vy / speed, vz / speed) if speed > 1e-9 else (1.0, 0.0, 0.0)
+    bx, by, byaw, *_ = trunk.pose_at(t_release)
+    c, s = math.cos(byaw), math.sin(byaw)
+    u = (c * u_body[0] - s * u_body[1], s * u_body[0] + c * u_body[1], u_body[2])
+    q = along((k.CARRY_FORWARD, 0.0, k.CARRY_HEIGHT), k.THROW_STOP_OFFSET, u_body)
+    stop = (bx + c * q[0] - s * q[1], by + s * q[0] + c * q[1], trunk.height + q[2])
+    v = speed * k.THROW_SPEED_GAIN
+    release = along(stop, -v * (t_follow - t_release) / 2.0, u)
+    cruise = along(release, -v * (t_release - t_cruise), u)
+    wind = along(cruise, -v * (t_cruise - t_wind) / 2.0, u)
+    return ThrowLine(wind, cruise, release, stop, (u[0] * v, u[1] * v, u[2] * v), (-s, c, 0.0))

@@ -1,0 +1,86 @@
+"""Hand path helpers (locoplan.plan.hand_paths): grip height, carry distance, frames, throw line."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from plan_fixtures import repo_scenario
+
+from locoplan.plan import compile_plan
+from locoplan.plan import constants as k
+from locoplan.plan.hand_paths import (
+    carry_forward,
+    grip_height,
+    throw_line,
+    tuck_waypoint,
+    world_to_trunk,
+)
+from locoplan.scenario.model import ObjectSpec
+
+EXACT = 1e-12  # closed forms, float rounding only
+
+
+def _box(height: float) -> ObjectSpec:
+    return ObjectSpec(shape="box", size=[0.2, 0.2, height], mass=1.0, position=[0.0, 0.0, 0.5])
+
+
+def test_grip_height_stays_below_the_top_and_spheres_at_the_equator() -> None:
+    assert grip_height(_box(0.30)) == k.GRASP_ABOVE_CENTRE
+    # a flat box: the hand sphere (HAND_RADIUS) stays GRASP_TOP_MARGIN below its top
+    flat = 0.10
+    assert grip_height(_box(flat)) == pytest.approx(
+        flat / 2 - k.HAND_RADIUS - k.GRASP_TOP_MARGIN, abs=EXACT
+    )
+    assert grip_height(_box(0.04)) == 0.0
+    ball = ObjectSpec(shape="sphere", size=[0.1], mass=1.0, position=[0.0, 0.0, 0.5])
+    assert grip_height(ball) == 0.0
+
+
+def test_carry_forward_keeps_the_pick_distance_within_range() -> None:
+    yaw = math.radians(90.0)
+    pose = (1.0, 2.0, yaw, 0.0, 0.0, 0.0)
+    assert carry_forward(pose, 1.0, 2.33) == pytest.approx(0.33, abs=EXACT)
+    hi = k.CARRY_FORWARD + k.CARRY_FORWARD_RANGE
+    lo = k.CARRY_FORWARD - k.CARRY_FORWARD_RANGE
+    assert carry_forward(pose, 1.0, 2.9) == pytest.approx(hi, abs=EXACT)
+    assert carry_forward(pose, 1.0, 2.1) == pytest.approx(lo, abs=EXACT)
+
+
+def test_world_to_trunk_inverts_the_trunk_mapping() -> None:
+    plan = compile_plan(repo_scenario("package-transfer"))
+    t = 1.0  # mid-turn
+    x, y, yaw, *_ = plan.trunk.pose_at(t)
+    local = (0.3, -0.1, 0.05)
+    c, s = math.cos(yaw), math.sin(yaw)
+    world = (
+        x + c * local[0] - s * local[1],
+        y + s * local[0] + c * local[1],
+        plan.trunk.height + local[2],
+    )
+    assert world_to_trunk(plan.trunk, t, world) == pytest.approx(local, abs=EXACT)
+    w = tuck_waypoint(1, 0.2)
+    assert w.frame == "trunk" and w.point[1] == -0.2
+
+
+def test_throw_line_lengths_and_velocity() -> None:
+    plan = compile_plan(repo_scenario("throw"))
+    v = (1.5, 0.0, 1.0)
+    t_wind, t_cruise, t_rel, t_follow = 2.7, 2.91, 2.93, 3.02
+    line = throw_line(plan.trunk, v, t_wind, t_cruise, t_rel, t_follow)
+    speed = math.hypot(1.5, 1.0) * k.THROW_SPEED_GAIN
+    assert np.linalg.norm(line.velocity) == pytest.approx(speed, abs=EXACT)
+    u = np.asarray(line.velocity) / speed
+    p = {n: np.asarray(getattr(line, n)) for n in ("wind", "cruise", "release", "stop")}
+    # each stretch lies along u: accelerate v T / 2, cruise v T, follow-through v T / 2
+    for a, b, length in (
+        ("wind", "cruise", speed * (t_cruise - t_wind) / 2),
+        ("cruise", "release", speed * (t_rel - t_cruise)),
+        ("release", "stop", speed * (t_follow - t_rel) / 2),
+    ):
+        assert p[b] - p[a] == pytest.approx(length * u, abs=1e-12)
+    # the line ends THROW_STOP_OFFSET beyond the carry pose (the trunk is at yaw 0, x = y = 0)
+    carry = np.array([k.CARRY_FORWARD, 0.0, plan.trunk.height + k.CARRY_HEIGHT])
+    assert p["stop"] == pytest.approx(carry + k.THROW_STOP_OFFSET * u, abs=EXACT)
+    assert line.lateral == pytest.approx((0.0, 1.0, 0.0), abs=EXACT)
