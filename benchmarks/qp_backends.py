@@ -1,6 +1,6 @@
 """QP backends on the MPC QP and on a WBC-like dense QP: daqp, proxsuite, piqp, and for
-reference quadprog and the hand-written dual active-set method (the MPC's default before
-daqp), when installed.
+reference quadprog when installed. (The hand-written dual active-set method that the MPC
+and the WBC's lean path used before daqp is gone; see git history.)
 
 Run: OMP_NUM_THREADS=1 .venv/bin/python benchmarks/qp_backends.py [--n 300]
 
@@ -29,7 +29,6 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -48,10 +47,6 @@ try:  # optional reference: Goldfarb-Idnani in Fortran (pip install quadprog)
     import quadprog
 except ImportError:  # pragma: no cover - optional
     quadprog = None
-try:  # the hand-written method, while the module exists (LeanDenseQp's fallback)
-    from locoplan.control.qp_active_set import solve_dual_active_set
-except ImportError:  # pragma: no cover - optional
-    solve_dual_active_set = None
 
 
 @dataclass
@@ -144,31 +139,6 @@ def least_distance_runner(
     return run
 
 
-def active_set_runner(warm: bool) -> Callable[[list[QpProblem]], list[Case]]:
-    """The hand-written dual active-set method (its own Cholesky factorisation)."""
-
-    def run(problems: list[QpProblem]) -> list[Case]:
-        assert solve_dual_active_set is not None
-        out = []
-        prev: Any = None
-        for p in problems:
-            hint = None
-            if warm and prev is not None and prev.x.shape[0] == p.n:
-                z = np.concatenate([prev.z_in, prev.z_box])
-                nz = np.flatnonzero(z)
-                hint = np.where(z[nz] > 0, p.n_in + p.n + nz, nz)
-            t0 = time.perf_counter()
-            r = solve_dual_active_set(
-                p.H, p.g, p.C, p.l, p.u, p.x_lower, p.x_upper, 1e-6, 100, initial_active=hint
-            )
-            ok = r.status == "solved"
-            out.append(Case(time.perf_counter() - t0, r.iterations, r.x if ok else None))
-            prev = r if ok else None
-        return out
-
-    return run
-
-
 def quadprog_runner(problems: list[QpProblem]) -> list[Case]:
     """quadprog.solve_qp (cold; it has no warm start): min 1/2 x'Gx - a'x s.t. C'x >= b, the
     one-sided rows built in the timed call."""
@@ -232,11 +202,6 @@ def configurations(
     ]
     if quadprog is not None:
         out.append(("quadprog (cold)", quadprog_runner))
-    if solve_dual_active_set is not None and inputs is not None:
-        out += [
-            ("hand-written active set, cold", active_set_runner(False)),
-            ("hand-written active set, warm", active_set_runner(True)),
-        ]
     return out
 
 

@@ -333,3 +333,21 @@ def test_daqp_least_distance_infeasible_is_not_ok() -> None:
         assert not sol.ok and sol.status == "primal_infeasible"
     # The solver recovers on a feasible problem afterwards.
     assert solver.solve(p, least_distance=_least_distance(p)).ok
+
+
+@pytest.mark.parametrize("where", ["row", "box"])
+def test_daqp_inverted_bounds_are_infeasible(where: str) -> None:
+    """DAQP does not check l <= u itself (it reported "solved" 50 N off the bounds on the WBC
+    QP with f_min > f_max); QpSolver must, on both of its daqp paths."""
+    p = _inequality_problem(2)
+    if where == "row":
+        l, u = np.array(p.l, copy=True), np.array(p.u, copy=True)
+        l[0], u[0] = 1.0, 0.5
+        bad = replace(p, l=l, u=u)
+    else:
+        lo, hi = np.array(p.x_lower, copy=True), np.array(p.x_upper, copy=True)
+        lo[0], hi[0] = 1.0, 0.5
+        bad = replace(p, x_lower=lo, x_upper=hi)
+    assert not QpSolver("daqp", TIGHT).solve(bad).ok
+    sol = QpSolver("daqp", TIGHT).solve(bad, least_distance=_least_distance(bad))
+    assert not sol.ok and sol.status == "primal_infeasible"

@@ -51,9 +51,6 @@ import piqp
 import scipy.sparse as sp
 from proxsuite import proxqp
 
-# Only LeanDenseQp (the lean WBC path at the end of this module) still uses it.
-from locoplan.control.qp_active_set import solve_dual_active_set
-
 FloatArray = npt.NDArray[np.float64]
 # A dense FloatArray or a scipy.sparse matrix (scipy ships no type stubs here).
 Matrix: TypeAlias = Any
@@ -203,9 +200,7 @@ class QpSettings:
     ``preconditioner`` lets the backend equilibrate the problem (proxsuite's Ruiz scaling costs
     about 1 ms on a 200-variable dense problem); ``update_preconditioner`` recomputes it when
     a re-used proxsuite solver gets new matrices. ``scaling`` applies a Jacobi scaling
-    x = D y, D = diag(H)^-1/2, before the backend (cheap, O(n^2)). ``active_set_iter`` is
-    read by `LeanDenseQp` only (the iteration cap of its active-set fallback); `QpSolver`
-    ignores it.
+    x = D y, D = diag(H)^-1/2, before the backend (cheap, O(n^2)).
     ``eps_primal_inf``/``eps_dual_inf`` are the infeasibility-detection thresholds
     (None: the backend's; proxsuite's default 1e-4 declared feasible MPC problems infeasible).
     ``max_iter_in`` caps proxsuite's inner iterations per outer one (None: its 1500): on an
@@ -229,7 +224,6 @@ class QpSettings:
     preconditioner: bool = True
     update_preconditioner: bool = True
     scaling: bool = False
-    active_set_iter: int = 0
     eps_primal_inf: float | None = None
     eps_dual_inf: float | None = None
     max_iter_in: int | None = None
@@ -242,8 +236,6 @@ class QpSettings:
             raise ValueError("QpSettings: eps_gap_abs must be > 0 and eps_gap_rel >= 0")
         if self.max_iter < 1:
             raise ValueError("QpSettings.max_iter must be >= 1")
-        if self.active_set_iter < 0:
-            raise ValueError("QpSettings.active_set_iter must be >= 0")
         if self.max_iter_in is not None and self.max_iter_in < 1:
             raise ValueError("QpSettings.max_iter_in must be >= 1")
         for name in ("eps_primal_inf", "eps_dual_inf"):
@@ -263,7 +255,8 @@ class QpSolution:
     wall time of the solve call (scaling, the backend's data update/setup and solve; s), of
     which ``setup_time_s`` was the backend's update/setup. ``iterations``: 0 when the
     unconstrained minimiser met every bound on daqp's least-distance path. ``active_set``:
-    `LeanDenseQp`'s own active-set method solved it (False from `QpSolver`). Residuals are
+    True from `LeanDenseQp` (DAQP's dual active-set method, called directly), False from
+    `QpSolver`. Residuals are
     infinity norms (the backend's; on daqp's least-distance path the dual residual is zero by
     construction up to rounding). Duals follow ``H x + g + A'y_eq + C'z_in + z_box = 0``.
     """
@@ -753,6 +746,22 @@ class QpSolver:
         # DAQP reads as many entries of each array as it has rows: never pass a short one.
         if not (bu.shape == bl.shape == sense.shape == (n_box + A_all.shape[0],)):
             raise AssertionError("daqp: inconsistent row counts")
+        if np.any(bl > bu):
+            # DAQP does not check l <= u: with an inverted row it can report "solved" at a
+            # point 50 N off the bounds (the WBC QP with f_min > f_max).
+            self._solver, self._key = None, None
+            return _Raw(
+                x=np.full(n, math.nan),
+                status="primal_infeasible",
+                iterations=0,
+                setup_time_s=0.0,
+                primal_residual=math.inf,
+                dual_residual=math.inf,
+                reused=False,
+                y_eq=np.zeros(n_eq),
+                z_in=np.zeros(m),
+                z_box=np.zeros(n),
+            )
         x, _, flag, info = daqp.solve(
             dense(p.H),
             np.ascontiguousarray(p.g, dtype=np.float64),
@@ -837,6 +846,13 @@ class QpSolver:
         upper = np.concatenate(hi_parts) - at_xu if hi_parts else np.zeros(0)
         viol = max(float(lower.max(initial=0.0)), float(-upper.min(initial=0.0)))
         z_in, z_box = np.zeros(m), np.zeros(n)
+        if viol > s.eps_abs and np.any(lower > upper):
+            # DAQP does not check l <= u (see _solve_daqp).
+            self.reset()
+            nan = np.full(n, math.nan)
+            return self._least_distance_solution(
+                p, t0, nan, "primal_infeasible", 0, 0.0, math.inf, z_in, z_box
+            )
         if viol <= s.eps_abs:
             # The unconstrained minimiser meets every bound: DAQP is not needed.
             return self._least_distance_solution(p, t0, x_u, "solved", 0, 0.0, viol, z_in, z_box)
@@ -960,55 +976,51 @@ def solve_qp(
 
 class LeanDenseQp:
     """Lean solver for a small dense QP ``min 1/2 x'Hx + g'x`` s.t. ``l <= C x <= u`` solved
-    again and again with new data (e.g. the WBC QP of one stance configuration, every tick).
+    again and again with new data (e.g. the WBC's reduced QP, every tick).
 
     ``solve`` skips `QpProblem`'s validation and `QpSolver.solve`'s scaling, residual and
-    complementarity checks, which cost more than the solve itself at this size. It factorises
-    H (LAPACK potrf) and takes the unconstrained minimiser if it meets every bound to
-    ``settings.eps_abs`` (the usual case in a WBC). Otherwise it guesses the active set --
-    the previous solution's, then the guess's constraints with positive multipliers plus the
-    violated ones, at most ``guess_rounds`` times -- and solves the equality-constrained QP of
-    each guess (Schur complement with H's factor). A guess whose multipliers are >= 0 and
-    whose point meets every bound is a KKT point, hence the optimum (H positive definite): a
-    guess can only cost time, never change the result, so it cannot go wrong at a contact
-    switch the way proxsuite's warm starts did (stack-notes.md). If no guess works, the dual
-    active-set method of `qp_active_set` (exact, started cold) runs for at most
-    ``settings.active_set_iter`` iterations. The result meets the KKT conditions by
-    construction (stationarity exact, multipliers >= 0, bounds to eps_abs), hence no
-    complementarity check.
+    complementarity checks, which cost more than the solve itself at this size, and hands
+    the data straight to ``daqp.solve`` (DAQP, a dual active-set method in C; it factorises
+    H and returns the unconstrained minimiser at once when it meets every bound). Every
+    solve starts cold: on the 169 recorded WBC ticks (tests/data/wbc_ticks.npz) a warm start
+    from the previous active set and a Python-side check of the unconstrained minimiser
+    were both slower than DAQP alone. DAQP's result is exact once it stops (stationarity to
+    rounding, multipliers of the right sign, bounds to ``settings.eps_abs``), hence no
+    complementarity check; ``settings.max_iter`` caps its iterations.
 
-    Statuses: "solved"; "primal_infeasible" (the active-set method's Farkas certificate);
-    "max_iterations"; "numerical_error" (H not positive definite). ``iterations`` counts
-    guesses tried plus active-set iterations. The caller guarantees the shapes (H (n, n)
-    symmetric positive definite, g (n,), C (m, n), l/u (m,) with +-inf for absent bounds) and
+    Statuses (`QpSolver`'s daqp mapping): "solved"; "primal_infeasible"; "max_iterations";
+    "numerical_error" (e.g. H not positive definite). ``iterations`` is DAQP's count.
+    Bounds with ``l > u`` are reported "primal_infeasible" without a solve (DAQP itself does
+    not check them). The caller guarantees the shapes (H (n, n) symmetric positive
+    definite, g (n,), C (m, n), l/u (m,) with +-inf for absent bounds, all float64) and
     finite data, and decides what to do on failure (e.g. solve it through `QpSolver`). No
-    array passed in is kept. `solve_x` returns only (x, status, iterations), for a control
-    loop's hot path (building the `QpSolution` costs a few microseconds).
+    array passed in is kept.
+    `solve_x` returns only (x, status, iterations), for a control loop's hot path (building
+    the `QpSolution` costs a few microseconds).
     """
 
-    def __init__(self, settings: QpSettings | None = None, guess_rounds: int = 3) -> None:
-        # Imported here to keep this path in one block of the module.
-        from scipy.linalg import get_lapack_funcs
-
-        self.settings = settings if settings is not None else QpSettings(active_set_iter=50)
-        if self.settings.active_set_iter < 1:
-            raise ValueError("LeanDenseQp needs QpSettings.active_set_iter >= 1")
-        self.guess_rounds = guess_rounds
-        self._potrf, self._potrs = get_lapack_funcs(("potrf", "potrs"), dtype=np.float64)
-        # Previous solution's active set: row of C -> True for its upper bound.
-        self._active: dict[int, bool] = {}
+    def __init__(self, settings: QpSettings | None = None) -> None:
+        self.settings = settings if settings is not None else QpSettings()
 
     def reset(self) -> None:
-        """Forget the previous solution's active set."""
-        self._active = {}
+        """Nothing to forget: every solve starts cold (kept for the solvers' interface)."""
 
     def solve(
         self, H: FloatArray, g: FloatArray, C: FloatArray, l: FloatArray, u: FloatArray
     ) -> QpSolution:
         """Solve; never raises on solver failure (check ``ok``/``status``)."""
         t0 = time.perf_counter()
-        x, status, iterations, violation, z_in = self._run(H, g, C, l, u)
+        x, status, iterations, lam = self._run(H, g, C, l, u)
         ok = status == "solved"
+        m, n = C.shape[0], g.shape[0]
+        z_in = lam if ok else np.zeros(m)
+        if ok:
+            Cx = C.dot(x)
+            violation = max(float((l - Cx).max(initial=0.0)), float((Cx - u).max(initial=0.0)))
+            stat = H.dot(x) + g + C.T.dot(z_in)
+            dual = float(np.max(np.abs(stat), initial=0.0))
+        else:
+            violation = dual = math.inf
         return QpSolution(
             x=x,
             status=status,
@@ -1017,14 +1029,14 @@ class LeanDenseQp:
             solve_time_s=time.perf_counter() - t0,
             setup_time_s=0.0,
             primal_residual=violation,
-            dual_residual=0.0,
+            dual_residual=dual,
             objective=float(0.5 * x.dot(H.dot(x)) + g.dot(x)) if ok else math.nan,
-            backend="active_set",
+            backend="daqp",
             reused=False,
             active_set=True,
             y_eq=np.zeros(0),
-            z_in=np.zeros(C.shape[0]) if z_in is None else z_in,
-            z_box=np.zeros(g.shape[0]),
+            z_in=z_in,
+            z_box=np.zeros(n),
         )
 
     def solve_x(
@@ -1032,91 +1044,22 @@ class LeanDenseQp:
     ) -> tuple[FloatArray, str, int]:
         """`solve` for a control loop's hot path: (x, status, iterations) only, without
         building a `QpSolution` (multipliers, objective, timings)."""
-        x, status, iterations, _, _ = self._run(H, g, C, l, u)
+        x, status, iterations, _ = self._run(H, g, C, l, u)
         return x, status, iterations
 
     def _run(
         self, H: FloatArray, g: FloatArray, C: FloatArray, l: FloatArray, u: FloatArray
-    ) -> tuple[FloatArray, str, int, float, FloatArray | None]:
-        """x, status, iterations, bound violation and z_in (None: all zero)."""
+    ) -> tuple[FloatArray, str, int, FloatArray]:
+        """x, status, iterations and DAQP's multipliers of C's rows (z_in's convention;
+        meaningless unless solved)."""
         s = self.settings
-        tol = s.eps_abs
-        n, m = g.shape[0], C.shape[0]
-        # H is symmetric: H.T is a column-major view that LAPACK takes without a copy.
-        factor, info = self._potrf(H.T, lower=1, clean=0, overwrite_a=0)
-        if info != 0:
-            self._active = {}
-            return np.full(n, math.nan), "numerical_error", 0, math.inf, None
-        x_u = self._potrs(factor, g, lower=1)[0]
-        np.negative(x_u, out=x_u)
-        Cx = Cx_u = C.dot(x_u)
-        viol = max(float((l - Cx).max(initial=0.0)), float((Cx - u).max(initial=0.0)))
-        if viol <= tol:
-            self._active = {}
-            return x_u, "solved", 0, viol, None
-        # Guesses: rows of C (int) -> True where the upper bound is active. With the guess's
-        # rows as equalities C_A x = bound_A: x = x_u + V mu, V = H^-1 C_A', mu = S^-1
-        # (bound_A - C_A x_u), S = C_A V, and z_A = -mu in H x + g + C' z = 0, which must be
-        # >= 0 on upper bounds and <= 0 on lower ones.
-        active: dict[int, bool] = {}
-        z_a: list[float] = []
-        rounds = 0
-        while True:
-            if rounds >= self.guess_rounds:
-                break
-            if rounds == 0 and self._active:
-                # Only rows with a finite bound on the guessed side (another problem's guess).
-                guess = {
-                    j: is_up
-                    for j, is_up in self._active.items()
-                    if j < m and math.isfinite(u[j] if is_up else l[j])
-                }
-            else:
-                guess = {
-                    j: is_up
-                    for (j, is_up), z_j in zip(active.items(), z_a, strict=True)
-                    if (z_j > 0.0 if is_up else z_j < 0.0)
-                }
-                guess.update((int(j), False) for j in np.flatnonzero(Cx < l - tol))
-                guess.update((int(j), True) for j in np.flatnonzero(Cx > u + tol))
-            if not guess:
-                # Nothing usable kept: start over from the rows x_u violates.
-                guess = {int(j): False for j in np.flatnonzero(Cx_u < l - tol)}
-                guess.update((int(j), True) for j in np.flatnonzero(Cx_u > u + tol))
-            if guess == active:
-                break
-            rounds += 1
-            active = guess
-            rows = list(active)
-            C_A = C[rows]
-            bound = np.array([u[j] if is_up else l[j] for j, is_up in active.items()])
-            # C_A' is column-major: LAPACK takes it without a copy.
-            V = self._potrs(factor, C_A.T, lower=1)[0]
-            Sf, info = self._potrf(C_A.dot(V), lower=1, clean=0, overwrite_a=1)
-            if info != 0:
-                break  # dependent rows: leave it to the active-set method
-            bound -= C_A.dot(x_u)
-            mu = self._potrs(Sf, bound, lower=1, overwrite_b=1)[0]
-            x = x_u + V.dot(mu)
-            Cx = C.dot(x)
-            viol = max(float((l - Cx).max(initial=0.0)), float((Cx - u).max(initial=0.0)))
-            z_a = (-mu).tolist()
-            if viol <= tol and all(
-                (z_j >= 0.0 if is_up else z_j <= 0.0)
-                for is_up, z_j in zip(active.values(), z_a, strict=True)
-            ):
-                self._active = active
-                z_in = np.zeros(m)
-                z_in[rows] = z_a
-                return x, "solved", rounds, viol, z_in
-        r = solve_dual_active_set(
-            H, g, C, l, u, tol=tol, max_iter=s.active_set_iter, cholesky=factor
+        if np.greater(l, u).any():
+            # DAQP does not check l <= u: with an inverted row it can report "solved".
+            return np.full(g.shape[0], math.nan), "primal_infeasible", 0, np.zeros(C.shape[0])
+        # A fresh sense array (all rows inactive, inequalities): a cold start.
+        sense = np.zeros(C.shape[0], dtype=np.intc)
+        x, _, flag, info = daqp.solve(
+            H, g, C, u, l, sense, primal_tol=s.eps_abs, iter_limit=s.max_iter
         )
-        iterations = rounds + r.iterations
-        if r.status == "solved":
-            nz = np.flatnonzero(r.z_in)
-            self._active = {int(j): bool(r.z_in[j] > 0.0) for j in nz}
-            return r.x, "solved", iterations, r.max_violation, r.z_in
-        self._active = {}
-        status = "primal_infeasible" if r.status == "infeasible" else "max_iterations"
-        return r.x, status, iterations, r.max_violation, None
+        status = _DAQP_STATUS.get(int(flag), f"daqp_{flag}")
+        return x, status, int(info["iterations"]), info["lam"]
