@@ -274,7 +274,7 @@ def run_command(
         "wbc", "--mapping", help="Torque mapping: wbc (paper's WBC QP) | jacobian (baseline)."
     ),
     qp_backend: str = typer.Option(
-        "proxsuite", "--qp", help="QP solver for MPC and WBC: proxsuite | piqp."
+        "daqp", "--qp", help="QP solver for MPC and WBC: daqp | proxsuite | piqp."
     ),
     f_min: float | None = typer.Option(
         None, "--f-min", metavar="N", help="Minimum vertical force per stance foot (default 10 N)."
@@ -321,8 +321,8 @@ def run_command(
         _fail(EXIT_BAD_INPUT, f"unknown --model '{model}'; allowed: external-force, combined")
     if mapping not in ("wbc", "jacobian"):
         _fail(EXIT_BAD_INPUT, f"unknown --mapping '{mapping}'; allowed: wbc, jacobian")
-    if qp_backend not in ("proxsuite", "piqp"):
-        _fail(EXIT_BAD_INPUT, f"unknown --qp '{qp_backend}'; allowed: proxsuite, piqp")
+    if qp_backend not in ("daqp", "proxsuite", "piqp"):
+        _fail(EXIT_BAD_INPUT, f"unknown --qp '{qp_backend}'; allowed: daqp, proxsuite, piqp")
     if not duration_scale > 0:
         _fail(EXIT_BAD_INPUT, f"--duration-scale must be positive, got {duration_scale}")
     scenario, text = _load_with_text_or_exit(file)
@@ -798,7 +798,7 @@ def compare_command(
         show_default=False,
     ),
     qp_backend: str = typer.Option(
-        "proxsuite", "--qp", help="QP solver for MPC and WBC: proxsuite | piqp."
+        "daqp", "--qp", help="QP solver for MPC and WBC: daqp | proxsuite | piqp."
     ),
     no_plots: bool = typer.Option(False, "--no-plots", help="Skip the PNG plots."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bars and no table."),
@@ -858,8 +858,8 @@ def compare_command(
         _fail(EXIT_BAD_INPUT, f"unknown --strategy '{strategy}'; allowed: {', '.join(STRATEGIES)}")
     if jobs is not None and jobs < 1:
         _fail(EXIT_BAD_INPUT, f"--jobs must be at least 1, got {jobs}")
-    if qp_backend not in ("proxsuite", "piqp"):
-        _fail(EXIT_BAD_INPUT, f"unknown --qp '{qp_backend}'; allowed: proxsuite, piqp")
+    if qp_backend not in ("daqp", "proxsuite", "piqp"):
+        _fail(EXIT_BAD_INPUT, f"unknown --qp '{qp_backend}'; allowed: daqp, proxsuite, piqp")
     scenario, text = _load_with_text_or_exit(file)
     assert isinstance(scenario, Scenario)
     kind: CompareKind = "models" if models else "strategies"

@@ -140,7 +140,7 @@ def run_variants(
     out_dir: Path,
     *,
     jobs: int | None = None,
-    qp_backend: str = "proxsuite",
+    qp_backend: str = "daqp",
     progress: VariantProgress | None = None,
 ) -> tuple[VariantOutcome, ...]:
     """Run every variant of `scenario` (its YAML `text` goes into each log) and return the

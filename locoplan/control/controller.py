@@ -84,7 +84,7 @@ class ControllerSettings:
     mpc_period: float = 0.01
     mapping: Literal["wbc", "jacobian"] = "wbc"
     model: Literal["external-force", "combined"] = "external-force"
-    qp_backend: str = "proxsuite"
+    qp_backend: str = "daqp"
     # The MPC must respect the line foot's small yaw friction like the WBC does: planning
     # turns on foot yaw moments (16 N m seen with a 4 kg box) spun the stance feet in place.
     mpc: MpcSettings = field(

@@ -60,7 +60,7 @@ class RunOptions:
     out_dir: Path = Path("runs")
     log: bool = True
     mapping: str = "wbc"
-    qp_backend: str = "proxsuite"
+    qp_backend: str = "daqp"
     f_min: float | None = None
     pushes: tuple[Push, ...] = ()
     log_name: str | None = None
