@@ -27,7 +27,7 @@ def main() -> None:
     parser.add_argument("scenario", nargs="?", default=str(ROOT / "scenarios/walk-square.yaml"))
     parser.add_argument("--repeat", type=int, default=1)
     parser.add_argument("--no-log", action="store_true", help="Run without the MCAP log.")
-    parser.add_argument("--qp", default="proxsuite", help="QP backend: proxsuite | piqp")
+    parser.add_argument("--qp", default="daqp", help="QP backend: daqp | proxsuite | piqp")
     args = parser.parse_args()
     loaded = load_scenario_file(args.scenario)
     rtfs = []

@@ -29,7 +29,7 @@ CACHE_DIRNAME = ".cache"
 # Bump when the stored format or the meaning of a key changes.
 CACHE_FORMAT = 1
 # Libraries whose version can change a run's numbers.
-_LIBRARIES = ("mujoco", "pin", "numpy", "scipy", "proxsuite", "piqp")
+_LIBRARIES = ("mujoco", "pin", "numpy", "scipy", "daqp", "proxsuite", "piqp")
 # Robot files larger than this are hashed by size and mtime only (meshes are big and rare).
 _MAX_HASHED_BYTES = 16 * 1024 * 1024
 

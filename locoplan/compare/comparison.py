@@ -169,7 +169,7 @@ def compare_scenario(
     kind: CompareKind = "strategies",
     strategy: str | None = None,
     jobs: int | None = None,
-    qp_backend: str = "proxsuite",
+    qp_backend: str = "daqp",
     progress: VariantProgress | None = None,
 ) -> Comparison:
     """Run `scenario` under both variants of `kind` and compare.
