@@ -240,9 +240,14 @@ class ClosedLoop:
         self._view_start()
         try:
             out = None
+            applied = np.zeros(len(rec.torque_limits))
             for i in range(n_steps):
                 t = be.time
-                if out is None or i % self.control_decimation == 0:
+                # Everything but the physics step runs at the control rate: the torques are
+                # held between control ticks (so is what the actuators apply), and grasps,
+                # belts, pushes and the fall check need no finer timing than 2 ms.
+                tick = out is None or i % self.control_decimation == 0
+                if tick:
                     state = be.robot_state()
                     out = self.controller.step(t, state.q, state.v)
                     split["dynamics"] += out.dynamics_time_s
@@ -258,30 +263,34 @@ class ClosedLoop:
                         rec.wbc_times_s.append(out.wbc_time_s)
                         if not out.wbc.ok:
                             rec.n_wbc_failures += 1
+                    rec.peak_commanded_ratio = max(
+                        rec.peak_commanded_ratio,
+                        float(np.max(np.abs(out.tau) / rec.torque_limits)),
+                    )
+                    for kind, fields in self.grasp.update(t, be.data):
+                        rec.grasp_events.append((t, kind, str(fields["object"])))
+                        if kind == "grasp_failed":
+                            rec.grasp_failures[str(fields["object"])] = float(fields["gap_m"])  # type: ignore[arg-type]
+                        if self.log is not None:
+                            self.log.event(t, kind, **fields)
+                    self.conveyor.apply(be.data, self.grasp.held_objects())
+                    if self.pushes:
+                        self._apply_pushes(t)
+                assert out is not None
                 rec.n_clipped += out.n_clipped
-                rec.peak_commanded_ratio = max(
-                    rec.peak_commanded_ratio, float(np.max(np.abs(out.tau) / rec.torque_limits))
-                )
-                for kind, fields in self.grasp.update(t, be.data):
-                    rec.grasp_events.append((t, kind, str(fields["object"])))
-                    if kind == "grasp_failed":
-                        rec.grasp_failures[str(fields["object"])] = float(fields["gap_m"])  # type: ignore[arg-type]
-                    if self.log is not None:
-                        self.log.event(t, kind, **fields)
-                self.conveyor.apply(be.data, self.grasp.held_objects())
                 t_p = time.perf_counter()
-                self._apply_pushes(t)
                 be.step(out.tau_clipped)
                 split["physics"] += time.perf_counter() - t_p
                 rec.n_ticks += 1
-                applied = be.applied_torques()
-                a = np.abs(applied)
-                bigger = a > rec.peak_abs_torque
-                if bigger.any():
-                    rec.peak_abs_torque[bigger] = a[bigger]
-                    rec.peak_torque_time[bigger] = t
-                if not be.state_is_finite():
-                    raise SimulationError(t, "non-finite state (NaN or inf)")
+                if tick:
+                    applied = be.applied_torques()
+                    a = np.abs(applied)
+                    bigger = a > rec.peak_abs_torque
+                    if bigger.any():
+                        rec.peak_abs_torque[bigger] = a[bigger]
+                        rec.peak_torque_time[bigger] = t
+                    if not be.state_is_finite():
+                        raise SimulationError(t, "non-finite state (NaN or inf)")
                 t_l = time.perf_counter()
                 if t + 1e-9 >= self._next_record:
                     self._next_record += RECORD_PERIOD
@@ -315,7 +324,7 @@ class ClosedLoop:
                             {"stance": list(out.stance), "wrench_world": out.wrench_world},
                         )
                 split["logging"] += time.perf_counter() - t_l
-                if not rec.fell and self._fallen():
+                if tick and not rec.fell and self._fallen():
                     rec.fell = True
                     rec.fall_time = be.time
                     if self.log is not None:

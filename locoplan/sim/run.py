@@ -350,6 +350,9 @@ def run_scenario(
             log_path,
             scenario_name=scenario.name,
             scenario_text=scenario_text,
+            # 6 decimals (um, mN) are far below what anyone reads off a plot, and rounding
+            # shortens what the JSON encoder writes (measured ~25 % cheaper per message).
+            json_decimals=6,
             metadata={
                 "strategy": plan.strategy,
                 "model": settings.model,
