@@ -7,7 +7,8 @@ point is its sphere's distance to the nearest obstacle surface (negative when it
 A hand track is checked along the planned trunk path and, because the real trunk follows the
 planned yaw only within a few degrees during a turn, also with the yaw off by
 +-max(YAW_ERROR_MIN, YAW_LAG_TIME |yaw rate|): "trunk" waypoints swing with the yaw error,
-"world" ones stay put.
+"world" ones stay put. Likewise the trunk may be TRUNK_POSITION_ERROR off its planned position
+(it leans back against a load, drifts while stepping), which moves "trunk" waypoints by as much.
 """
 
 from __future__ import annotations
@@ -107,19 +108,24 @@ def track_clearance(
     threshold: float,
     yaw_offsets: tuple[float, ...] | None = None,
     dt: float = k.CLEARANCE_DT,
+    give_up_below: float = -math.inf,
 ) -> Clearance:
     """Clearance of the hand sphere following `track` on [t0, t1] (s), sampled every `dt`
     (and at t1), with the trunk on its planned path turned by each of `yaw_offsets` (rad;
     None: 0 and +-the expected yaw error, see the module docstring). The hand point moves at
     most about 2 m/s, so 10 ms samples miss at most 2 cm of a path that grazes an edge;
-    thresholds are chosen with that in mind."""
+    thresholds are chosen with that in mind. The check stops early once the clearance is
+    below `give_up_below` (m; a search that only wants paths better than one it has); then
+    `first_below` is only some time below the threshold, not the first."""
     best = Clearance(math.inf, t0, "", None)
     if not obstacles or t1 < t0:
         return best
     n = max(1, math.ceil((t1 - t0) / dt - 1e-9))
     minimum, when, what = math.inf, t0, ""
     first: float | None = None
-    for i in range(n + 1):
+    # Latest first: a candidate path is usually closest where it reaches its target, so a
+    # search that gives up below a clearance it already has stops soonest that way.
+    for i in range(n, -1, -1):
         t = min(t1, t0 + i * dt)
         worst = math.inf
         if yaw_offsets is None:
@@ -127,14 +133,23 @@ def track_clearance(
             offsets: tuple[float, ...] = (0.0, -lag, lag)
         else:
             offsets = yaw_offsets
+        # A trunk TRUNK_POSITION_ERROR off its plan moves trunk-relative targets with it (a
+        # blend of trunk and world waypoints partly): the clearance is reduced by that much.
+        b = base_pose(trunk, t)
+        p0, _ = track.evaluate(t, b)
+        shifted = BasePose(b.x + k.TRUNK_POSITION_ERROR, b.y, b.z, b.c, b.s, b.vx, b.vy, b.vz, b.wz)
+        p1, _ = track.evaluate(t, shifted)
+        drift = math.dist(p0, p1)
         for off in offsets:
             p, _ = track.evaluate(t, base_pose(trunk, t, off))
             for ob in obstacles:
-                d = ob.distance(p, t) - k.HAND_RADIUS
+                d = ob.distance(p, t) - k.HAND_RADIUS - drift
                 if d < worst:
                     worst = d
                 if d < minimum:
                     minimum, when, what = d, t, ob.name
-        if first is None and worst < threshold:
+        if worst < threshold:
             first = t
+        if minimum < give_up_below:
+            break
     return Clearance(minimum, when, what, first)

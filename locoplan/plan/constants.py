@@ -131,16 +131,21 @@ APPROACH_SLACK: Final = 0.005
 # least YAW_ERROR_MIN (rad).
 YAW_LAG_TIME: Final = 0.04
 YAW_ERROR_MIN: Final = math.radians(0.5)
+# How far the trunk may be off its planned position when hand paths are checked (m): measured
+# 2-3 cm of drift while turning in place.
+TRUNK_POSITION_ERROR: Final = 0.02
 # Sampling period of the clearance check (s).
 CLEARANCE_DT: Final = 0.01
 # Tucked hand pose of the LEFT hand in trunk (m): close to the body and wide, so that the hands
-# stay clear of what the robot turns or walks towards (within 0.2 m of the trunk
+# stay clear of what the robot turns or walks towards (within 0.185 m of the trunk
 # axis, inside a table's near edge 0.25 m away).
-HAND_TUCK_IN_TRUNK: Final = (0.10, 0.17, -0.05)
+HAND_TUCK_IN_TRUNK: Final = (0.08, 0.165, -0.05)
 # Time to move a hand into the tucked pose (s), and how long before the first predicted
 # collision of the direct path the tuck is complete (s).
 TUCK_DURATION: Final = 0.4
 TUCK_LEAD: Final = 0.1
+# Step (s) by which the tuck is moved earlier when the tuck itself would pass too close.
+TUCK_STEP: Final = 0.05
 # Shortest reach from the tucked pose to the pre-grasp points (s): about 0.25 m at a peak speed
 # below 1.9 m/s.
 REACH_MIN_DURATION: Final = 0.25

@@ -92,11 +92,12 @@ def path_clearance(
     trunk: TrunkPath,
     obstacles: tuple[Obstacle, ...],
     threshold: float,
+    give_up_below: float = -math.inf,
 ) -> Clearance:
     """Clearance on [t0, t1] (s) of the hand's track made of the segments `done` so far and
-    the candidate segments `extra`."""
+    the candidate segments `extra` (see `track_clearance` for `give_up_below`)."""
     track = make_track(HAND_NAMES[hand], default_waypoint(hand), done + extra)
-    return track_clearance(track, trunk, obstacles, t0, t1, threshold)
+    return track_clearance(track, trunk, obstacles, t0, t1, threshold, give_up_below=give_up_below)
 
 
 def approach_segments(
@@ -117,15 +118,22 @@ def approach_segments(
     otherwise the hand first tucks in (close to the body and `tuck_y` wide, in trunk; possibly
     before `start`, as soon as the hand is free) before the direct path would collide, waits
     there while the trunk turns or walks, and reaches out at the earliest time from which the
-    rest of the path is clear. A hand that starts closer than APPROACH_CLEARANCE (resting
+    rest of the path is clear (tucking earlier, down to as soon as the hand is free, when the
+    tuck itself would pass too close). A hand that starts closer than APPROACH_CLEARANCE (resting
     beside the object) only has to get no closer (within APPROACH_SLACK). If no tucked path is
     clear, the one with the largest clearance wins.
     """
     cur = done[-1].end if done else default_waypoint(hand)
     t_free = done[-1].t1 if done else 0.0
 
-    def gap(extra: list[HandSegment], t0: float, t1: float, threshold: float) -> Clearance:
-        return path_clearance(hand, done, extra, t0, t1, trunk, obstacles, threshold)
+    def gap(
+        extra: list[HandSegment],
+        t0: float,
+        t1: float,
+        threshold: float,
+        give_up_below: float = -math.inf,
+    ) -> Clearance:
+        return path_clearance(hand, done, extra, t0, t1, trunk, obstacles, threshold, give_up_below)
 
     direct = [HandSegment(start, t_end, cur, target, task_index, "reach")]
     threshold = min(
@@ -135,22 +143,31 @@ def approach_segments(
     if c_direct.first_below is None:
         return direct
     t_hit = c_direct.first_below
-    t_tuck1 = min(max(t_hit - k.TUCK_LEAD, t_free + k.TUCK_DURATION), t_end - k.REACH_MIN_DURATION)
-    t_tuck0 = max(t_free, t_tuck1 - k.TUCK_DURATION)
-    if t_tuck1 <= t_tuck0:
-        return direct
-    tuck = tuck_waypoint(hand, tuck_y)
-    w_tuck = HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")
+    # Latest tuck first (the hands stay out as long as they can), then earlier ones; for each,
+    # the earliest reach start from which the rest is clear.
+    t_tuck1_latest = min(
+        max(t_hit - k.TUCK_LEAD, t_free + k.TUCK_DURATION), t_end - k.REACH_MIN_DURATION
+    )
     best, best_gap = direct, c_direct.minimum
-    n = int((t_end - k.REACH_MIN_DURATION - t_tuck1) / k.REACH_START_STEP + 1e-9)
-    for j in range(n + 1):
-        t_r = t_tuck1 + j * k.REACH_START_STEP
-        cand = [w_tuck, HandSegment(t_r, t_end, tuck, target, task_index, "reach")]
-        c = gap(cand, t_tuck0, t_end, threshold)
-        if c.first_below is None:
-            return cand
-        if c.minimum > best_gap:
-            best, best_gap = cand, c.minimum
+    t_tuck1 = t_tuck1_latest
+    while True:
+        t_tuck0 = max(t_free, t_tuck1 - k.TUCK_DURATION)
+        if t_tuck1 <= t_tuck0:
+            break
+        tuck = tuck_waypoint(hand, tuck_y)
+        w_tuck = HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")
+        n = int((t_end - k.REACH_MIN_DURATION - t_tuck1) / k.REACH_START_STEP + 1e-9)
+        for j in range(n + 1):
+            t_r = t_tuck1 + j * k.REACH_START_STEP
+            cand = [w_tuck, HandSegment(t_r, t_end, tuck, target, task_index, "reach")]
+            c = gap(cand, t_tuck0, t_end, threshold, give_up_below=best_gap)
+            if c.first_below is None:
+                return cand
+            if c.minimum > best_gap:
+                best, best_gap = cand, c.minimum
+        if t_tuck0 <= t_free:
+            break
+        t_tuck1 = max(t_tuck1 - k.TUCK_STEP, t_free + k.TUCK_DURATION)
     return best
 
 
