@@ -45,6 +45,7 @@ if TYPE_CHECKING:
 
 ON_FIXTURE_TOL = 0.03  # m: object bottom within this of a fixture's top counts as resting on it
 AT_TOL = 0.05  # m: a drop `at` a point is met within this distance
+LANDED_TOL = 0.01  # m: a thrown object's centre this close to its floor height has landed
 
 
 @dataclass(frozen=True, slots=True)
@@ -202,7 +203,11 @@ def _object_goal_times(scenario: Scenario, plan: Plan, rec: RunRecord) -> dict[i
             elif task.action == "drop" and task.at is not None:
                 ok = np.linalg.norm(p - np.asarray(task.at)) <= AT_TOL and speed[i] <= REST_SPEED
             else:
-                ok = speed[i] <= REST_SPEED and i > i0 + 5
+                # Thrown: landed when it first comes down to the floor (a ball then rolls on
+                # for a long time, so "at rest" would come late or never).
+                spec = scenario.objects[name]
+                half_h = spec.size[0] if spec.shape == "sphere" else spec.size[2] / 2
+                ok = i > i0 + 5 and p[2] <= half_h + LANDED_TOL
             if ok:
                 out[k] = float(t[i])
                 break
