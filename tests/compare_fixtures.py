@@ -87,10 +87,10 @@ fixtures:
   table:
     kind: table
     position: [0.0, {s * (0.45 + d):.4f}, 0.0]
-    size: [0.50, 0.40, 0.47]
+    size: [0.34, 0.40, 0.47]
   conveyor:
     kind: conveyor
-    position: [{0.40 + d:.4f}, 0.0, 0.0]
+    position: [{0.35 + d:.4f}, 0.0, 0.0]
     size: [1.20, 0.35, 0.47]
     yaw: 90
     speed: 0.2
@@ -98,7 +98,7 @@ tasks:
   - {{action: turn, angle: {90 * s:g}, start: 0.0, duration: 1.6}}
   - {{action: pick, object: package, start: 0.9, duration: 1.0}}
   - {{action: turn, angle: {-90 * s:g}, start: 1.9, duration: 1.6}}
-  - {{action: drop, object: package, onto: conveyor, start: 2.8, duration: 0.8}}
+  - {{action: drop, object: package, onto: conveyor, start: 2.8, duration: 1.2}}
 end: 4.6
 expect:
   no_fall: true

@@ -86,8 +86,8 @@ def test_package_transfer_dynamic_is_faster_with_less_yaw(tmp_path: Path) -> Non
 @NEEDS_MANIPULATION
 @pytest.mark.parametrize(
     ("side", "mass", "shift"),
-    [(-1.0, 3.0, 0.0), (1.0, 4.0, 0.0), (1.0, 2.0, 0.03)],
-    ids=["mirrored-table-right", "package-4kg", "fixtures-3cm-further-2kg"],
+    [(-1.0, 3.0, 0.0), (1.0, 2.0, 0.0), (1.0, 2.5, 0.03)],
+    ids=["mirrored-table-right", "package-2kg", "fixtures-3cm-further-2.5kg"],
 )
 def test_package_transfer_variants(tmp_path: Path, side: float, mass: float, shift: float) -> None:
     text = package_transfer_yaml(side, mass, shift)

@@ -49,6 +49,10 @@ FloatArray = npt.NDArray[np.float64]
 
 GRAVITY = 9.81
 LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (goes off)
+# The weight goes off faster than it comes on: the plan lowers the object onto its support
+# only in the last moments before the release, and carrying it while the controller already
+# thinks it lighter made the hands sag and the robot fall forward after placing it.
+LOAD_RAMP_DOWN = 0.3  # s
 LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
 FEET = ("L", "R")
 
@@ -302,7 +306,7 @@ class LocoManipulationController:
     def carried_mass(self, times: FloatArray) -> FloatArray:
         """Mass (kg) the hands carry at `times` (n,): each held object's mass times a load
         fraction that rises smoothly over LOAD_RAMP after the planned lift-off and falls over
-        LOAD_RAMP before a drop's release (a throw lets go at once).
+        LOAD_RAMP_DOWN before a drop's release (a throw lets go at once).
 
         Why a ramp rather than the plan's 0/1 sigma_e: a step in the load makes the CoM
         reference jump back by m_o d / (m + m_o) (11 cm for 8 kg). The MPC answered such a jump
@@ -319,7 +323,7 @@ class LocoManipulationController:
                 if h.release_kind == "throw":
                     frac = np.where(t < h.release, frac, 0.0)
                 else:
-                    down = np.clip((h.release - t) / LOAD_RAMP, 0.0, 1.0)
+                    down = np.clip((h.release - t) / LOAD_RAMP_DOWN, 0.0, 1.0)
                     frac = frac * down * down * (3.0 - 2.0 * down)
             out += h.mass * frac
         return out
