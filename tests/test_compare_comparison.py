@@ -17,8 +17,11 @@ pytestmark = pytest.mark.closed_loop
 # What the issue asks of the package transfer (paper: 1.7 s sooner, up to 30 deg less).
 MIN_TIME_SAVED = 1.0  # s
 MIN_YAW_REDUCTION = 15.0  # deg
-NEEDS_MANIPULATION = pytest.mark.xfail(
-    reason="needs issue 5 manipulation (grasp, carry, place)", strict=False
+# Two of the three variants still drop the package off the conveyor's near edge (mirrored
+# geometry, dynamic) or between robot and belt (fixtures 3 cm further, quasi-static): the
+# placement has a 2 cm margin and the robot's position error is larger. Issue 6 stays open.
+PLACEMENT_MARGIN_TOO_THIN = pytest.mark.xfail(
+    reason="the package is released at the conveyor's edge in this geometry", strict=False
 )
 
 
@@ -77,16 +80,18 @@ def _compare(scenario: Scenario, text: str, out: Path) -> Comparison:
     return compare_scenario(scenario, text, out, jobs=2)
 
 
-@NEEDS_MANIPULATION
 def test_package_transfer_dynamic_is_faster_with_less_yaw(tmp_path: Path) -> None:
     scenario, text = repo_scenario_text("package-transfer")
     _assert_package_transfer_holds(_compare(scenario, text, tmp_path))
 
 
-@NEEDS_MANIPULATION
 @pytest.mark.parametrize(
     ("side", "mass", "shift"),
-    [(-1.0, 3.0, 0.0), (1.0, 2.0, 0.0), (1.0, 2.5, 0.03)],
+    [
+        pytest.param(-1.0, 3.0, 0.0, marks=PLACEMENT_MARGIN_TOO_THIN),
+        (1.0, 2.0, 0.0),
+        pytest.param(1.0, 2.5, 0.03, marks=PLACEMENT_MARGIN_TOO_THIN),
+    ],
     ids=["mirrored-table-right", "package-2kg", "fixtures-3cm-further-2.5kg"],
 )
 def test_package_transfer_variants(tmp_path: Path, side: float, mass: float, shift: float) -> None:
