@@ -11,6 +11,7 @@ from typing import NoReturn
 
 import typer
 from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from locoplan import __version__
 
@@ -38,6 +39,20 @@ app = typer.Typer(
 
 out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+def _sim_progress(show: bool, label_width: int = 0) -> Progress:
+    """A progress display in simulated seconds (one bar per run); silent unless `show`."""
+    width = f":<{label_width}" if label_width else ""
+    return Progress(
+        TextColumn("[bold]{task.description" + width + "}"),
+        BarColumn(),
+        TextColumn("t = {task.completed:.2f} / {task.total:.2f} s"),
+        TimeElapsedColumn(),
+        console=out,
+        disable=not show,
+        transient=True,
+    )
 
 
 def _fail(code: int, message: str) -> NoReturn:
@@ -306,8 +321,6 @@ def run_command(
     import json
     from pathlib import Path
 
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
     from locoplan.exceptions import SimulationError, SolverFailure
     from locoplan.log.termination import install_termination_handlers
     from locoplan.plan import STRATEGIES, PlanError
@@ -341,15 +354,7 @@ def run_command(
     restore = install_termination_handlers()
     log_hint = Path(out_dir) / f"{scenario.name}.mcap"
     try:
-        with Progress(
-            TextColumn("[bold]{task.description}"),
-            BarColumn(),
-            TextColumn("t = {task.completed:.2f} / {task.total:.2f} s"),
-            TimeElapsedColumn(),
-            console=out,
-            disable=not show,
-            transient=True,
-        ) as bar:
+        with _sim_progress(show) as bar:
             task_id = bar.add_task(scenario.name, total=1.0)
 
             def on_progress(t: float, total: float) -> None:
@@ -836,7 +841,7 @@ def compare_command(
     """
     from pathlib import Path
 
-    from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
+    from rich.progress import TaskID
 
     from locoplan.compare import (
         CompareKind,
@@ -868,15 +873,7 @@ def compare_command(
     show = not quiet and out.is_terminal
     restore = install_termination_handlers()
     try:
-        with Progress(
-            TextColumn("[bold]{task.description:<14}"),
-            BarColumn(),
-            TextColumn("t = {task.completed:.2f} / {task.total:.2f} s"),
-            TimeElapsedColumn(),
-            console=out,
-            disable=not show,
-            transient=True,
-        ) as bar:
+        with _sim_progress(show, label_width=14) as bar:
             bars: dict[str, TaskID] = {label: bar.add_task(label, total=1.0) for label in labels}
 
             def on_progress(label: str, t: float, total: float) -> None:
