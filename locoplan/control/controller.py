@@ -52,7 +52,7 @@ LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (g
 # The weight goes off faster than it comes on: the plan lowers the object onto its support
 # only in the last moments before the release, and carrying it while the controller already
 # thinks it lighter made the hands sag and the robot fall forward after placing it.
-LOAD_RAMP_DOWN = 0.3  # s
+LOAD_RAMP_DOWN = 0.6  # s
 LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
 FEET = ("L", "R")
 
