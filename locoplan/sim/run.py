@@ -37,7 +37,7 @@ from locoplan.plan import Plan, compile_plan
 from locoplan.render.samples import RenderSample
 from locoplan.robot.description import RobotDescription, load_robot_description
 from locoplan.scenario import Scenario
-from locoplan.sim.loop import ClosedLoop, Push, RunRecord
+from locoplan.sim.loop import RECORD_PERIOD, ClosedLoop, Push, RunRecord
 from locoplan.sim.scene import FixtureDef, ObjectDef, Scene, build_scene
 
 if TYPE_CHECKING:
@@ -130,21 +130,18 @@ def _task_goals(plan: Plan) -> list[TaskGoal]:
 def _object_state(
     scenario: Scenario, rec: RunRecord, name: str
 ) -> tuple[list[float], str | None, bool]:
-    """Final position, the fixture it rests on (or None) and whether it is still lifted."""
+    """Final position, the fixture it rests on (or None) and whether it is still lifted.
+    Resting on a conveyor means riding its belt: moving no faster than the belt."""
     traj = np.asarray(rec.object_positions[name])
     pos = traj[-1]
     spec = scenario.objects[name]
     half_h = spec.size[0] if spec.shape == "sphere" else spec.size[2] / 2
-    moving = False
+    speed = 0.0
     if len(traj) > 5:
-        moving = bool(np.linalg.norm(traj[-1] - traj[-5]) / (4 * 0.01) > 0.05)
+        speed = float(np.linalg.norm(traj[-1] - traj[-5]) / (4 * RECORD_PERIOD))
     on: str | None = None
     for fname, f in scenario.fixtures.items():
-        c, s = math.cos(math.radians(f.yaw)), math.sin(math.radians(f.yaw))
-        dx, dy = pos[0] - f.position[0], pos[1] - f.position[1]
-        lx, ly = c * dx + s * dy, -s * dx + c * dy
-        inside = abs(lx) <= f.size[0] / 2 and abs(ly) <= f.size[1] / 2
-        if inside and abs(pos[2] - half_h - f.size[2]) <= ON_FIXTURE_TOL and not moving:
+        if _on_fixture(scenario, name, pos, fname) and speed <= abs(f.speed or 0.0) + REST_SPEED:
             on = fname
     lifted = bool(pos[2] - half_h > 0.05 and on is None)
     return [round(float(x), 4) for x in pos], on, lifted

@@ -22,6 +22,7 @@ FloatArray = npt.NDArray[np.float64]
 FLOOR_FRICTION = 1.0
 FIXTURE_FRICTION = 1.0
 OBJECT_FRICTION = 1.0
+BELT_CONTACT_FRICTION = 0.05
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,7 +103,15 @@ def build_scene(
             size=[sx / 2, sy / 2, sz / 2],
             pos=[fx.position[0], fx.position[1], fx.position[2] + sz / 2],
             quat=_yaw_quat(fx.yaw),
-            friction=[FIXTURE_FRICTION, 0.005, 0.0001],
+            # A conveyor's top is a moving belt: its contact friction is near zero and the belt's
+            # drag (locoplan.sim.grasp.ConveyorDrive) moves what rests on it.
+            friction=[
+                FIXTURE_FRICTION if fx.kind != "conveyor" else BELT_CONTACT_FRICTION,
+                0.005,
+                0.0001,
+            ],
+            # MuJoCo takes the larger friction of two geoms unless one has priority.
+            priority=1 if fx.kind == "conveyor" else 0,
             rgba=[0.55, 0.4, 0.25, 1.0] if fx.kind != "conveyor" else [0.2, 0.2, 0.25, 1.0],
             contype=1,
             conaffinity=1,
