@@ -78,6 +78,17 @@ def test_holds_fourteen_kilograms_standing(tmp_path: Path) -> None:
     assert result.metrics["objects"]["block"]["held"]
 
 
+def test_pick_walk_drop_places_the_box(tmp_path: Path) -> None:
+    result = _run(tmp_path, ROOT / "scenarios" / "pick-walk-drop.yaml")
+    rec = result.record
+    box = np.asarray(rec.object_positions["box"])
+    assert not result.metrics["fell"]
+    # Carried 0.5 m or more (horizontally, start to end) and resting on its platform.
+    assert np.linalg.norm(box[-1, :2] - box[0, :2]) >= 0.5
+    assert result.metrics["objects"]["box"]["on"] == "platform"
+    assert result.metrics["expectations"]["placed.box"]["ok"]
+
+
 def test_throw_lands_near_the_ballistic_prediction(tmp_path: Path) -> None:
     result = _run(tmp_path, ROOT / "scenarios" / "throw.yaml")
     rec = result.record
