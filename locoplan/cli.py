@@ -184,24 +184,6 @@ _PLAN_PLOT = typer.Option(
 )
 
 
-def _plan_load_or_exit(name: str) -> object:
-    """Load and validate a task script; on bad input print every issue and exit 2."""
-    from locoplan.exceptions import ScenarioError
-    from locoplan.scenario import load_scenario
-    from locoplan.scenario.yaml_source import MAX_BYTES
-
-    text: bytes | str | None = None
-    if name == "-":
-        buffer = getattr(sys.stdin, "buffer", None)
-        text = buffer.read(MAX_BYTES + 1) if buffer else sys.stdin.read()
-    try:
-        return load_scenario(name, text)
-    except ScenarioError as exc:
-        for issue in exc.issues:
-            err.print(str(issue), markup=False, emoji=False, highlight=False)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
-
-
 @app.command("plan")
 def plan_command(
     file: str = _PLAN_FILE,
@@ -234,7 +216,7 @@ def plan_command(
 
     if strategy is not None and strategy not in STRATEGIES:
         _fail(EXIT_BAD_INPUT, f"unknown --strategy '{strategy}'; allowed: {', '.join(STRATEGIES)}")
-    scenario = _plan_load_or_exit(file)
+    scenario, _ = _load_with_text_or_exit(file)
     assert isinstance(scenario, Scenario)
     try:
         plan = compile_plan(scenario, strategy)

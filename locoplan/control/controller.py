@@ -42,6 +42,7 @@ from locoplan.control.wbc import (
 )
 from locoplan.exceptions import SolverFailure
 from locoplan.plan import Plan
+from locoplan.robot.conventions import pin_base_rotation
 from locoplan.robot.description import RobotDescription
 from locoplan.robot.pinocchio_model import PinocchioRobot
 
@@ -59,16 +60,6 @@ FEET = ("L", "R")
 
 def wrap_angle(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
-def quat_xyzw_to_matrix(qx: float, qy: float, qz: float, qw: float) -> FloatArray:
-    return np.array(
-        [
-            [1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
-            [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
-            [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)],
-        ]
-    )
 
 
 def rpy_from_matrix(R: FloatArray) -> tuple[float, float, float]:
@@ -355,7 +346,7 @@ class LocoManipulationController:
         t_dyn = time.perf_counter()
         r = self.robot
         r.update(q, v)
-        R = quat_xyzw_to_matrix(q[3], q[4], q[5], q[6])
+        R = pin_base_rotation(q)
         roll, pitch, yaw = rpy_from_matrix(R)
         omega_w = R @ v[3:6]
         p_c = np.asarray(r.com_position, dtype=float)
