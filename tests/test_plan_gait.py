@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from plan_fixtures import repo_scenario, scenario_files, scenario_from_text
@@ -124,3 +126,13 @@ def test_footholds_follow_trunk_and_end_square() -> None:
     assert fh[1, 0] == pytest.approx([0.5, 0.1, 0.0], abs=1e-12)
     assert fh[1, 1] == pytest.approx([0.5, -0.1, 0.0], abs=1e-12)
     assert fh[2, 0] == pytest.approx([x - np.sin(yaw) * 0.1, y + np.cos(yaw) * 0.1, 0.0], abs=1e-9)
+
+
+def test_stance_starts_is_stance_start_at_every_time() -> None:
+    plan = compile_plan(repo_scenario("step"))
+    times = np.linspace(-0.1, plan.t_end + 0.1, 997)
+    for foot in ("L", "R"):
+        got = plan.stance_starts(foot, times)
+        for t, g in zip(times.tolist(), got.tolist(), strict=True):
+            want = plan.stance_start(foot, t)
+            assert (want is None and math.isnan(g)) or want == g

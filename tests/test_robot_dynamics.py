@@ -285,3 +285,18 @@ def test_sign_conventions(
             assert abs(dp[axis]) < 1e-12  # a planar motion: round-off only
         else:
             assert np.sign(dp[axis]) == sign and abs(dp[axis]) > 1e-3
+
+
+def test_frames_kinematics_stacks_the_single_frame_accessors(
+    desc: RobotDescription, robot: PinocchioRobot
+) -> None:
+    names = (*desc.foot_frames, *desc.hand_frames, desc.trunk_body)
+    for q, v in random_states(desc, 3, seed=5):
+        robot.update(q, v)
+        p, R, J, dJv = robot.frames_kinematics(names)
+        for i, name in enumerate(names):
+            # Same pinocchio data read two ways: equal to the last bit.
+            assert np.array_equal(p[i], robot.frame_position(name))
+            assert np.array_equal(R[i], robot.frame_rotation(name))
+            assert np.array_equal(J[i], robot.frame_jacobian(name))
+            assert np.array_equal(dJv[i], robot.frame_jdot_v(name))

@@ -32,14 +32,15 @@ import numpy.typing as npt
 from locoplan.control.contact import ContactLimits
 from locoplan.control.mpc import MpcInput, MpcSettings, MpcSolution, MultiContactMpc
 from locoplan.control.swing import min_jerk, swing_point
-from locoplan.control.tasks import TaskGains, build_tasks, rot_z, rotation_error
+from locoplan.control.tasks import TaskGains, rot_z, rotation_error
 from locoplan.control.wbc import (
-    StanceContact,
     WbcOutput,
     WbcSettings,
     WholeBodyQp,
-    prioritized_acceleration,
+    prioritized_rows,
+    wrench_world_to_w5,
 )
+from locoplan.control.wbc_kernels import stack_tasks
 from locoplan.exceptions import SolverFailure
 from locoplan.plan import Plan
 from locoplan.robot.conventions import pin_base_rotation
@@ -165,6 +166,21 @@ class LocoManipulationController:
         # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
         self._cols_leg = [np.arange(6, 11), np.arange(11, 16)]
         self._cols_arm = [np.arange(16, 19), np.arange(19, 22)]
+        # Frames read every tick, in `step`'s order: feet, hands, trunk.
+        self._frames = (*desc.foot_frames, *desc.hand_frames, desc.trunk_body)
+        s = self.s
+        self._gains = TaskGains(
+            s.trunk_kp_pos,
+            s.trunk_kd_pos,
+            s.trunk_kp_rot,
+            s.trunk_kd_rot,
+            s.swing_kp_acc,
+            s.swing_kd_acc,
+            s.swing_kp_rot,
+            s.swing_kd_rot,
+        ).packed()
+        self._hand_kp = s.hand_kp_acc
+        self._hand_kd = s.hand_kd_acc
         self._nominal_geometry()
 
     # -- set-up --------------------------------------------------------------------------------
@@ -214,7 +230,20 @@ class LocoManipulationController:
         """Planned touchdown point (3,) and yaw of foot k for a touchdown at `t_td` (paper's
         Raibert rule on top of the reference's planned displacement)."""
         p_ref, v_ref, yaw_ref, _, _ = self._com_reference(np.array([t, t_td]))
-        yaw_td = float(yaw_ref[1])
+        return self._foothold_from(k, t_td, p_c, v_c, p_ref, v_ref, float(yaw_ref[1]))
+
+    def _foothold_from(
+        self,
+        k: int,
+        t_td: float,
+        p_c: FloatArray,
+        v_c: FloatArray,
+        p_ref: FloatArray,
+        v_ref: FloatArray,
+        yaw_td: float,
+    ) -> tuple[FloatArray, float]:
+        """`_foothold` given the CoM reference now and at touchdown: p_ref and v_ref (2, 3)
+        rows [now, touchdown], yaw_td the reference yaw at touchdown (rad)."""
         off = rot_z(yaw_td) @ self.foot_offset_from_com[k]
         stance_time = self.plan.gait_period_at(t_td) / 2.0
         # Relative to where the CoM would be without the held-load shift: the feet must keep
@@ -236,43 +265,55 @@ class LocoManipulationController:
         p_feet_now: FloatArray,
         yaw_feet_now: FloatArray,
         p_hands_mid: FloatArray,
+        mass_now: float,
     ) -> MpcSolution:
+        """One MPC update at t. The plan is queried once per update: the trunk reference at
+        the horizon's times, now, and each planned touchdown inside the horizon in one
+        vectorised evaluation."""
         N = self.s.mpc.horizon
         dt = self.s.mpc.dt
+        plan = self.plan
         times = t + dt * np.arange(1, N + 1, dtype=np.float64)
-        p_ref, v_ref, yaw_ref, w_ref, p_base_ref = self._com_reference(times)
+        # Touchdowns inside the horizon: the stance a foot will be in at each step started
+        # after t (NaN: the initial stance, compares False).
+        td = np.stack([plan.stance_starts(k, times) for k in range(2)])
+        future = td > t + 1e-9
+        keys = sorted({(k, x) for k in range(2) for x in td[k][future[k]].tolist()})
+        eval_times = np.concatenate([times, [t], [x for _, x in keys]])
+        p_all, v_all, yaw_all, w_all, pb_all = self._com_reference(eval_times)
+        p_ref, v_ref, yaw_ref, w_ref = p_all[:N], v_all[:N], yaw_all[:N], w_all[:N]
         x_ref = np.zeros((N, 15))
         x_ref[:, 2] = yaw_ref
         x_ref[:, 3:6] = p_ref
         x_ref[:, 8] = w_ref
         x_ref[:, 9:12] = v_ref
         x_ref[:, 14] = -GRAVITY
-        contact = np.asarray(self.plan.contact_flags(times), dtype=bool)
-        p_feet = np.zeros((N, 2, 3))
-        foot_yaw = np.zeros((N, 2))
+        contact = np.asarray(plan.contact_flags(times), dtype=bool)
+        p_feet = np.repeat(p_feet_now[None], N, axis=0)
+        foot_yaw = np.repeat(yaw_feet_now[None], N, axis=0)
         self._footholds.clear()
-        for k in range(2):
-            for i in range(N):
-                t_td = self.plan.stance_start(k, float(times[i]))
-                if t_td is None or t_td <= t + 1e-9:
-                    p_feet[i, k] = p_feet_now[k]
-                    foot_yaw[i, k] = yaw_feet_now[k]
-                else:
-                    if (k, t_td) not in self._footholds:
-                        self._footholds[(k, t_td)] = self._foothold(k, t, t_td, p_c, v_c)
-                    p_feet[i, k], foot_yaw[i, k] = self._footholds[(k, t_td)]
+        for j, (k, t_td) in enumerate(keys):
+            rows = [N, N + 1 + j]
+            fh = self._foothold_from(
+                k, t_td, p_c, v_c, p_all[rows], v_all[rows], float(yaw_all[N + 1 + j])
+            )
+            self._footholds[(k, t_td)] = fh
+            at = future[k] & (td[k] == t_td)
+            p_feet[at, k] = fh[0]
+            foot_yaw[at, k] = fh[1]
         obj_mass = self.carried_mass(times)
         held = obj_mass > 0.0
-        p_obj = np.asarray(self.plan.object_positions(times, p_base_ref, yaw_ref), dtype=float)
-        if self.carried_mass(np.array([t]))[0] > 0.0:
+        if held.any():
+            p_obj = np.asarray(plan.object_positions(times, pb_all[:N], yaw_ref), dtype=float)
+        else:
+            # What object_positions gives where nothing is held: the trunk position.
+            p_obj = pb_all[:N].copy()
+        if mass_now > 0.0:
             # Feedback on where the load really is: the object sits between the hands, which
             # lag their planned path (most when the robot turns with a load); shift the
             # planned object path by today's error.
-            ref0 = self.plan.trunk_reference_at(t)
             planned_now = np.asarray(
-                self.plan.object_positions(
-                    np.array([t]), np.asarray(ref0.position)[None, :], np.array([ref0.yaw])
-                ),
+                plan.object_positions(np.array([t]), pb_all[N : N + 1], yaw_all[N : N + 1]),
                 dtype=float,
             )[0]
             p_obj = p_obj + (p_hands_mid - planned_now)
@@ -345,23 +386,26 @@ class LocoManipulationController:
         """Torques (16,) for state (q (23,), v (22,), pinocchio convention) at time t (s)."""
         t_dyn = time.perf_counter()
         r = self.robot
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        v = np.ascontiguousarray(v, dtype=np.float64)
         r.update(q, v)
         R = pin_base_rotation(q)
         roll, pitch, yaw = rpy_from_matrix(R)
-        omega_w = R @ v[3:6]
-        p_c = np.asarray(r.com_position, dtype=float)
-        v_c = np.asarray(r.com_velocity, dtype=float)
-        p_feet = np.array([r.frame_position(f) for f in self.desc.foot_frames])
-        R_feet = [r.frame_rotation(f) for f in self.desc.foot_frames]
-        yaw_feet = np.array([math.atan2(Rf[1, 0], Rf[0, 0]) for Rf in R_feet])
-        J_feet = [r.frame_jacobian(f) for f in self.desc.foot_frames]
-        dJv_feet = [r.frame_jdot_v(f) for f in self.desc.foot_frames]
-        v_feet = [J @ v for J in J_feet]
+        omega_w = R.dot(v[3:6])
+        p_c = r.com_position
+        v_c = r.com_velocity
+        # Feet (0, 1), hands (2, 3) and trunk (4), stacked.
+        p_fr, R_fr, J_fr, dJv_fr = r.frames_kinematics(self._frames)
+        v_fr = J_fr.dot(v)
+        p_feet, R_feet, J_feet, dJv_feet = p_fr[:2], R_fr[:2], J_fr[:2], dJv_fr[:2]
+        v_feet = v_fr[:2]
+        yaw_feet = np.arctan2(R_feet[:, 1, 0], R_feet[:, 0, 0])
         dyn_time = time.perf_counter() - t_dyn
 
-        stance = tuple(bool(self.plan.foot_stance(k, t)) for k in range(2))
-        # The held-load CoM shift at this tick (footholds and the trunk task both use it).
-        self._shift_now = self._com_shift(np.array([t]))[0]
+        plan = self.plan
+        stance = (bool(plan.foot_stance(0, t)), bool(plan.foot_stance(1, t)))
+        ref = plan.trunk_reference_at(t)
+        mass_now = float(self.carried_mass(np.array([t]))[0])
         # Swing bookkeeping: remember where each swing started.
         for k in range(2):
             if not stance[k] and self._last_contact[k]:
@@ -370,43 +414,44 @@ class LocoManipulationController:
                 sw.p_start = p_feet[k].copy()
                 sw.yaw_start = float(yaw_feet[k])
         contact_changed = stance != self._last_contact
-        self._last_contact = (stance[0], stance[1])
+        self._last_contact = stance
 
         # MPC.
         mpc_sol: MpcSolution | None = None
         mpc_time = 0.0
         if contact_changed or t - self._last_mpc_t >= self.s.mpc_period - 1e-9:
-            yaw_ref_now = float(self.plan.trunk_reference_at(t).yaw)
+            # The held-load CoM shift, updated with the MPC and held in between (it follows
+            # the load ramp, about 1 mm per MPC period at most): the footholds and the trunk
+            # task use it.
+            self._shift_now = self._com_shift(np.array([t]))[0]
+            yaw_ref_now = float(ref.yaw)
             yaw_meas = yaw_ref_now + wrap_angle(yaw - yaw_ref_now)
             x0 = np.concatenate([[roll, pitch, yaw_meas], p_c, omega_w, v_c, [0, 0, -GRAVITY]])
             t_m = time.perf_counter()
-            p_hands_mid = 0.5 * (
-                r.frame_position(self.desc.hand_frames[0])
-                + r.frame_position(self.desc.hand_frames[1])
-            )
-            mpc_sol = self._run_mpc(t, x0, p_c, v_c, p_feet, yaw_feet, p_hands_mid)
+            p_hands_mid = 0.5 * (p_fr[2] + p_fr[3])
+            mpc_sol = self._run_mpc(t, x0, p_c, v_c, p_feet, yaw_feet, p_hands_mid, mass_now)
             mpc_time = time.perf_counter() - t_m
             if not mpc_sol.ok and self._last_mpc is None:
                 raise SolverFailure(t, "mpc", self.s.qp_backend, mpc_sol.status)
             self._last_mpc = mpc_sol
             self._last_mpc_t = t
         assert self._last_mpc is not None
-        forces = np.array(self._last_mpc.forces_world, dtype=float)
-        moments = np.array(self._last_mpc.moments_world, dtype=float)
         wrench = np.zeros((2, 6))
         for k in range(2):
             if stance[k]:
-                wrench[k, :3] = forces[k]
-                wrench[k, 3:] = moments[k]
+                wrench[k, :3] = self._last_mpc.forces_world[k]
+                wrench[k, 3:] = self._last_mpc.moments_world[k]
 
-        # Swing-foot targets.
+        # Swing-foot targets: position, velocity, acceleration rows and yaw per swinging foot.
         foot_targets = np.full((2, 3), np.nan)
         foot_yaw_targets = np.full(2, np.nan)
-        swing_acc: list[tuple[FloatArray, FloatArray, FloatArray, float]] = []
+        swing_pva = np.zeros((2, 3, 3))
+        swing_yaw = np.zeros(2)
+        n_swing = 0
         for k in range(2):
             if stance[k]:
                 continue
-            ph = self.plan.swing_phase(k, t)
+            ph = plan.swing_phase(k, t)
             if ph is None:
                 continue
             sw = self._swing[k]
@@ -421,23 +466,18 @@ class LocoManipulationController:
             yaw_des = sw.yaw_start + sb * wrap_angle(yaw_td - sw.yaw_start)
             foot_targets[k] = pt.position
             foot_yaw_targets[k] = yaw_des
-            swing_acc.append((pt.position, pt.velocity, pt.acceleration, yaw_des))
+            swing_pva[n_swing] = (pt.position, pt.velocity, pt.acceleration)
+            swing_yaw[n_swing] = yaw_des
+            n_swing += 1
         # Hand targets.
-        base_pos = q[:3]
-        targets = self.plan.hand_targets_at(t, base_pos, yaw, R @ v[:3], float(omega_w[2]))
+        targets = plan.hand_targets_at(t, q[:3], yaw, R.dot(v[:3]), float(omega_w[2]))
         hand_targets = np.asarray(targets.positions, dtype=float)
         v_hand_des = np.asarray(targets.velocities, dtype=float)
-        J_hands = [r.frame_jacobian(h) for h in self.desc.hand_frames]
-        p_hands = np.array([r.frame_position(h) for h in self.desc.hand_frames])
-        v_hands = [J[:3] @ v for J in J_hands]
-        hand_acc = np.array(
-            [
-                self.s.hand_kp_acc * (hand_targets[k] - p_hands[k])
-                + self.s.hand_kd_acc * (v_hand_des[k] - v_hands[k])
-                for k in range(2)
-            ]
-        )
-        tau_ext = self._object_generalized_force(t, J_hands, hand_acc)
+        J_hands = np.ascontiguousarray(J_fr[2:4, :3])
+        p_hands = p_fr[2:4]
+        v_hands = v_fr[2:4, :3]
+        hand_acc = self._hand_kp * (hand_targets - p_hands) + self._hand_kd * (v_hand_des - v_hands)
+        tau_ext = self._object_generalized_force(t, mass_now, J_hands, hand_acc)
 
         t_w = time.perf_counter()
         wbc_out: WbcOutput | None = None
@@ -449,7 +489,8 @@ class LocoManipulationController:
                 v_feet,
                 p_feet,
                 R_feet,
-                swing_acc,
+                swing_pva[:n_swing],
+                swing_yaw[:n_swing],
                 J_hands,
                 p_hands,
                 v_hands,
@@ -458,46 +499,47 @@ class LocoManipulationController:
                 tau_ext,
             )
         else:
-            ref = self.plan.trunk_reference_at(t)
-            tasks = build_tasks(
-                TaskGains(
-                    self.s.trunk_kp_pos,
-                    self.s.trunk_kd_pos,
-                    self.s.trunk_kp_rot,
-                    self.s.trunk_kd_rot,
-                    self.s.swing_kp_acc,
-                    self.s.swing_kd_acc,
-                    self.s.swing_kp_rot,
-                    self.s.swing_kd_rot,
-                ),
+            p_des = np.asarray(ref.position, dtype=float).copy()
+            p_des[:2] += self._shift_now
+            J_t, b_t, a_t, ends = stack_tasks(
+                self._gains,
                 q,
                 v,
                 R,
                 omega_w,
-                np.asarray(ref.position, dtype=float) + np.append(self._shift_now, 0.0),
+                p_des,
                 np.asarray(ref.velocity, dtype=float),
                 float(ref.yaw),
                 float(ref.yaw_rate),
-                r.frame_jacobian(self.desc.trunk_body),
-                r.frame_jdot_v(self.desc.trunk_body),
-                stance,
+                J_fr[4],
+                dJv_fr[4],
+                np.array(stance, dtype=np.bool_),
                 J_feet,
                 dJv_feet,
                 v_feet,
                 p_feet,
                 R_feet,
-                swing_acc,
-                [J[:3] for J in J_hands],
-                [r.frame_jdot_v(h)[:3] for h in self.desc.hand_frames],
+                n_swing,
+                swing_pva,
+                swing_yaw,
+                J_hands,
+                np.ascontiguousarray(dJv_fr[2:4, :3]),
                 hand_acc,
             )
-            qdd_cmd = prioritized_acceleration(tasks, 22)
-            contacts = [
-                StanceContact.from_world(J_feet[k], float(yaw_feet[k]), wrench[k])
-                for k in range(2)
-                if stance[k]
-            ]
-            wbc_out = self.wbc.solve(r.M, r.h, qdd_cmd, contacts, tau_ext)
+            qdd_cmd = prioritized_rows(J_t, a_t - b_t, ends)
+            idx = [k for k in range(2) if stance[k]]
+            w5 = np.zeros(5 * len(idx))
+            for i, k in enumerate(idx):
+                w5[5 * i : 5 * i + 5] = wrench_world_to_w5(float(yaw_feet[k]), wrench[k])
+            wbc_out = self.wbc.solve_arrays(
+                r.M,
+                r.h,
+                qdd_cmd,
+                J_feet[idx].reshape(-1, J_feet.shape[2]),
+                yaw_feet[idx],
+                w5,
+                tau_ext,
+            )
             tau = wbc_out.tau
         wbc_time = time.perf_counter() - t_w
         tau_clipped = np.clip(tau, -self.tau_limits, self.tau_limits)
@@ -507,7 +549,7 @@ class LocoManipulationController:
             tau_clipped=tau_clipped,
             n_clipped=n_clipped,
             wrench_world=wrench,
-            stance=(stance[0], stance[1]),
+            stance=stance,
             foot_targets=foot_targets,
             foot_yaw_targets=foot_yaw_targets,
             hand_targets=hand_targets,
@@ -520,15 +562,15 @@ class LocoManipulationController:
 
     # -- pieces ---------------------------------------------------------------------------------
     def _object_generalized_force(
-        self, t: float, J_hands: list[FloatArray], hand_acc: FloatArray
+        self, t: float, mass: float, J_hands: FloatArray, hand_acc: FloatArray
     ) -> FloatArray:
-        """J_e' F_ext (nv,): what the held object does to the holding hands, shared equally:
-        its weight and its inertia at the hands' commanded accelerations,
+        """J_e' F_ext (nv,): what the held object of `mass` (kg, the carried mass at t) does to
+        the holding hands (J_hands (2, 3, nv) linear Jacobians), shared equally: its weight
+        and its inertia at the hands' commanded accelerations (2, 3),
         F_hand = (m_o / n) (g - a_hand). The pinocchio model does not contain the object, so
         without the inertial part the hand tasks act as if the hands were empty and lag a
         heavy load."""
-        tau_ext = np.zeros(22)
-        mass = float(self.carried_mass(np.array([t]))[0])
+        tau_ext = np.zeros(J_hands.shape[2])
         if mass <= 0.0:
             return tau_ext
         hands = self.plan.holding_hands(t)
@@ -539,26 +581,30 @@ class LocoManipulationController:
         a_obj = np.mean([hand_acc[k] for k in hands], axis=0)
         f = mass / len(hands) * (np.array([0.0, 0.0, -GRAVITY]) - a_obj)
         for k in hands:
-            tau_ext += J_hands[k][:3].T @ f
+            tau_ext += J_hands[k].T.dot(f)
         return tau_ext
 
     def _jacobian_mapping(
         self,
         stance: tuple[bool, ...],
         wrench: FloatArray,
-        J_feet: list[FloatArray],
-        v_feet: list[FloatArray],
+        J_feet: FloatArray,
+        v_feet: FloatArray,
         p_feet: FloatArray,
-        R_feet: list[FloatArray],
-        swing: list[tuple[FloatArray, FloatArray, FloatArray, float]],
-        J_hands: list[FloatArray],
+        R_feet: FloatArray,
+        swing_pva: FloatArray,
+        swing_yaw: FloatArray,
+        J_hands: FloatArray,
         p_hands: FloatArray,
-        v_hands: list[FloatArray],
+        v_hands: FloatArray,
         hand_des: FloatArray,
         hand_vel_des: FloatArray,
         tau_ext: FloatArray,
     ) -> FloatArray:
-        """Baseline: stance legs tau = h - J' W; swing legs and arms tau = h + J' F_PD."""
+        """Baseline: stance legs tau = h - J' W; swing legs and arms tau = h + J' F_PD.
+        Feet arrays are stacked per foot (J_feet (2, 6, nv), ...); swing_pva (n, 3, 3) and
+        swing_yaw (n,) hold the targets of the n swinging feet in foot order; J_hands
+        (2, 3, nv) are the hands' linear Jacobians."""
         s = self.s
         h = self.robot.h - tau_ext
         tau_full = h.copy()
@@ -568,8 +614,9 @@ class LocoManipulationController:
             J = J_feet[k][:, cols]
             if stance[k]:
                 tau_full[cols] -= J.T @ wrench[k]
-            elif i_sw < len(swing):
-                p_d, v_d, _, yaw_d = swing[i_sw]
+            elif i_sw < len(swing_yaw):
+                p_d, v_d, _ = swing_pva[i_sw]
+                yaw_d = float(swing_yaw[i_sw])
                 i_sw += 1
                 F = s.swing_kp_force * (p_d - p_feet[k]) + s.swing_kd_force * (v_d - v_feet[k][:3])
                 e = rotation_error(rot_z(yaw_d), R_feet[k])
@@ -580,5 +627,5 @@ class LocoManipulationController:
             F = s.hand_kp_force * (hand_des[k] - p_hands[k]) + s.hand_kd_force * (
                 hand_vel_des[k] - v_hands[k]
             )
-            tau_full[cols] += J_hands[k][:3, cols].T @ F
+            tau_full[cols] += J_hands[k][:, cols].T @ F
         return tau_full[6:]

@@ -3,8 +3,9 @@
 `build_tasks` stacks, in priority order: the stance contacts (J_c qdd + Jdot_c v = 0, five
 rows per line foot: no constraint on roll about the foot's long axis, which the 5-DoF leg
 cannot control), the trunk pose PD (position and orientation), then the swing feet
-(position, pitch and yaw) and the hands. Pure numpy, pinocchio's conventions: Jacobians are
-LOCAL_WORLD_ALIGNED (rows: linear then angular velocity in world axes).
+(position, pitch and yaw) and the hands. Pinocchio's conventions: Jacobians are
+LOCAL_WORLD_ALIGNED (rows: linear then angular velocity in world axes). The arithmetic is
+compiled (`locoplan.control.wbc_kernels.stack_tasks`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from locoplan.control.wbc import AccelerationTask
+from locoplan.control.wbc_kernels import N_GAINS, stack_tasks
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -34,6 +36,25 @@ class TaskGains:
     swing_kp_rot: float
     swing_kd_rot: float
 
+    def packed(self) -> FloatArray:
+        """The gains as `wbc_kernels.stack_tasks` takes them (N_GAINS,): trunk kp_pos,
+        kd_pos, kp_rot, kd_rot (3 each), swing kp, kd, kp_rot, kd_rot."""
+        out = np.array(
+            [
+                *self.trunk_kp_pos,
+                *self.trunk_kd_pos,
+                *self.trunk_kp_rot,
+                *self.trunk_kd_rot,
+                self.swing_kp,
+                self.swing_kd,
+                self.swing_kp_rot,
+                self.swing_kd_rot,
+            ],
+            dtype=float,
+        )
+        assert out.shape == (N_GAINS,)
+        return out
+
 
 def rot_z(yaw: float) -> FloatArray:
     """Rotation matrix about z by `yaw` (rad)."""
@@ -49,35 +70,6 @@ def rotation_error(R_des: FloatArray, R: FloatArray) -> FloatArray:
     theta = math.acos(cos_t)
     f = 0.5 if theta < 1e-6 else theta / (2.0 * math.sin(theta))
     return np.array([f * (e21 - e12), f * (e02 - e20), f * (e10 - e01)])
-
-
-Rows = list[list[float]]
-
-
-def _yaw_error(yaw: float, R: Rows) -> tuple[float, float, float]:
-    """`rotation_error(rot_z(yaw), R)` on plain floats (R as row lists): the log map of
-    E = R_z(yaw) R'."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
-    e00, e01 = c * r00 - s * r01, c * r10 - s * r11
-    e10, e11 = s * r00 + c * r01, s * r10 + c * r11
-    e02, e12 = c * r20 - s * r21, s * r20 + c * r21
-    cos_t = max(-1.0, min(1.0, (e00 + e11 + r22 - 1.0) / 2.0))
-    theta = math.acos(cos_t)
-    f = 0.5 if theta < 1e-6 else theta / (2.0 * math.sin(theta))
-    return f * (r12 - e12), f * (e02 - r02), f * (e10 - e01)
-
-
-def _line_foot_rows(
-    J: FloatArray, dJv: FloatArray, R_foot: FloatArray, J_out: FloatArray, b_out: FloatArray
-) -> None:
-    """Write the 5 controllable rows of a line foot's Jacobian and drift into J_out (5, nv)
-    and b_out (5,): linear (3) and angular about the foot's own y and z axes (2)."""
-    Ryz = R_foot[:, 1:].T
-    J_out[:3] = J[:3]
-    Ryz.dot(J[3:], out=J_out[3:])
-    b_out[:3] = dJv[:3]
-    b_out[3:] = Ryz.dot(dJv[3:])
 
 
 def build_tasks(
@@ -104,73 +96,43 @@ def build_tasks(
     hand_acc: FloatArray,
 ) -> list[AccelerationTask]:
     """Tasks in priority order. `swing` holds (p, v, a, yaw) targets of the swing feet in
-    foot order; `hand_acc` (2, 3) the hands' commanded accelerations (world, m/s^2)."""
-    nv = J_base.shape[1]
-    tasks: list[AccelerationTask] = []
-    feet = [k for k in range(2) if stance[k]]
-    if feet:
-        n = 5 * len(feet)
-        Jc = np.empty((n, nv))
-        bc = np.empty(n)
-        for i, k in enumerate(feet):
-            rows = slice(5 * i, 5 * i + 5)
-            _line_foot_rows(J_feet[k], dJv_feet[k], R_feet[k], Jc[rows], bc[rows])
-        tasks.append(AccelerationTask(Jc, bc, np.zeros(n)))
-    # Position and orientation in one level: the base's 6 DoF are independent, so stacking
-    # them costs one 6x6 solve instead of two 3x3 ones and changes nothing. 3-vector
-    # arithmetic on floats: a numpy call per operation would cost several times more.
-    R = R_base.tolist()
-    ex, ey, ez = _yaw_error(yaw_des, R)
-    wx, wy, wz = omega_world.tolist()
-    kp, kd = g.trunk_kp_rot, g.trunk_kd_rot
-    acc_rot = (
-        kp[0] * ex - kd[0] * wx,
-        kp[1] * ey - kd[1] * wy,
-        kp[2] * ez + kd[2] * (yaw_rate_des - wz),
+    foot order; `hand_acc` (2, 3) the hands' commanded accelerations (world, m/s^2).
+
+    The rows come from the compiled `wbc_kernels.stack_tasks` (the controller calls it
+    directly with stacked arrays); this list form is for tests and tools."""
+    swing_pva = np.zeros((2, 3, 3))
+    swing_yaw = np.zeros(2)
+    for j, (p_d, v_d, a_d, yaw_d) in enumerate(swing[:2]):
+        swing_pva[j] = (p_d, v_d, a_d)
+        swing_yaw[j] = yaw_d
+    J, b, a, ends = stack_tasks(
+        g.packed(),
+        np.ascontiguousarray(q, dtype=float),
+        np.ascontiguousarray(v, dtype=float),
+        np.ascontiguousarray(R_base, dtype=float),
+        np.ascontiguousarray(omega_world, dtype=float),
+        np.ascontiguousarray(p_base_des, dtype=float),
+        np.ascontiguousarray(v_base_des, dtype=float),
+        float(yaw_des),
+        float(yaw_rate_des),
+        np.ascontiguousarray(J_base, dtype=float),
+        np.ascontiguousarray(dJv_base, dtype=float),
+        np.array(stance[:2], dtype=np.bool_),
+        np.array(J_feet, dtype=float),
+        np.array(dJv_feet, dtype=float),
+        np.array(v_feet, dtype=float),
+        np.ascontiguousarray(p_feet, dtype=float),
+        np.array(R_feet, dtype=float),
+        min(len(swing), 2),
+        swing_pva,
+        swing_yaw,
+        np.array(J_hands, dtype=float).reshape(len(J_hands), 3, J_base.shape[1]),
+        np.array(dJv_hands, dtype=float).reshape(len(J_hands), 3),
+        np.ascontiguousarray(hand_acc, dtype=float).reshape(len(J_hands), 3),
     )
-    vb = v[:3].tolist()
-    v_world = [r[0] * vb[0] + r[1] * vb[1] + r[2] * vb[2] for r in R]
-    kp, kd = g.trunk_kp_pos, g.trunk_kd_pos
-    acc_pos = [
-        kp[i] * (pd - qi) + kd[i] * (vd - vw)
-        for i, (pd, qi, vd, vw) in enumerate(
-            zip(p_base_des.tolist(), q[:3].tolist(), v_base_des.tolist(), v_world, strict=True)
-        )
-    ]
-    tasks.append(AccelerationTask(J_base, dJv_base, np.array([*acc_pos, *acc_rot])))
-    swings = [k for k in range(2) if not stance[k]][: len(swing)]
-    n_hand = sum(J.shape[0] for J in J_hands)
-    n = 5 * len(swings) + n_hand
-    J2 = np.empty((n, nv))
-    b2 = np.empty(n)
-    a2 = np.empty(n)
-    r = 0
-    for (p_d, v_d, a_d, yaw_d), k in zip(swing, swings, strict=False):
-        Rf = R_feet[k].tolist()
-        vf = v_feet[k].tolist()
-        sw_kp, sw_kd = g.swing_kp, g.swing_kd
-        acc = [
-            a + sw_kp * (pd - p) + sw_kd * (vd - vv)
-            for a, pd, p, vd, vv in zip(
-                a_d.tolist(), p_d.tolist(), p_feet[k].tolist(), v_d.tolist(), vf, strict=False
-            )
-        ]
-        # Angular error and rate in the foot frame; only its y and z rows are tasks.
-        e = _yaw_error(yaw_d, Rf)
-        for j in (1, 2):
-            col = [Rf[0][j], Rf[1][j], Rf[2][j]]
-            e_j = col[0] * e[0] + col[1] * e[1] + col[2] * e[2]
-            w_j = col[0] * vf[3] + col[1] * vf[4] + col[2] * vf[5]
-            acc.append(g.swing_kp_rot * e_j - g.swing_kd_rot * w_j)
-        a2[r : r + 5] = acc
-        _line_foot_rows(J_feet[k], dJv_feet[k], R_feet[k], J2[r : r + 5], b2[r : r + 5])
-        r += 5
-    for J, dJv, acc_h in zip(J_hands, dJv_hands, hand_acc, strict=True):
-        kh = J.shape[0]
-        J2[r : r + kh] = J
-        b2[r : r + kh] = dJv
-        a2[r : r + kh] = acc_h
-        r += kh
-    if n:
-        tasks.append(AccelerationTask(J2, b2, a2))
+    tasks: list[AccelerationTask] = []
+    start = 0
+    for end in ends.tolist():
+        tasks.append(AccelerationTask(J[start:end], b[start:end], a[start:end]))
+        start = end
     return tasks

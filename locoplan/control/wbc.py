@@ -27,25 +27,20 @@ the fallback and `WbcSettings(lean=False)` selects it.
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
-import scipy.linalg
 
+from locoplan.control import wbc_kernels as _kernels
 from locoplan.control.contact import ContactLimits, wrench5_to_world, wrench_rows
 from locoplan.control.qp import LeanDenseQp, QpProblem, QpSettings, QpSolver
 
 FloatArray = npt.NDArray[np.float64]
 
 NV_BASE = 6
-
-_potrf, _potrs, _trtri = scipy.linalg.get_lapack_funcs(
-    ("potrf", "potrs", "trtri"), dtype=np.float64
-)
 
 
 @dataclass(frozen=True, slots=True)
@@ -65,13 +60,6 @@ def damped_pinv(J: FloatArray, damping: float) -> FloatArray:
     return np.asarray(np.linalg.solve(G, J).T, dtype=np.float64)
 
 
-@functools.lru_cache(maxsize=64)
-def _scaled_identity(k: int, scale: float) -> FloatArray:
-    out = scale * np.eye(k)
-    out.flags.writeable = False
-    return out
-
-
 def prioritized_acceleration(
     tasks: list[AccelerationTask], nv: int, damping: float = 1e-6
 ) -> FloatArray:
@@ -79,45 +67,34 @@ def prioritized_acceleration(
     of the tasks above it.
 
     With N_0 = I and, for task i, JN = J_i N_i, G = JN JN' + damping I:
-    qdd += JN' G^-1 (xdd_des - jdot_v - J_i qdd) and N_{i+1} = N_i - JN' G^-1 JN. With
-    G = L L' (LAPACK potrf) and W = L^-1 JN (explicit inverse of the k x k factor, trtri):
-    JN' G^-1 r = W' L^-1 r and JN' G^-1 JN = W'W, fewer and cheaper calls than triangular
-    solves at these sizes. N is not formed for the first task (N_0 = I) nor after the last.
-    """
-    last = len(tasks) - 1
-    qdd = np.zeros(nv)
-    N: FloatArray | None = None
-    for i, task in enumerate(tasks):
-        J = task.J
-        k = J.shape[0]
-        r = task.xdd_des - task.jdot_v
-        if N is None:
-            JN = J
-        else:
-            JN = J.dot(N)
-            r -= J.dot(qdd)
-        G = JN.dot(JN.T)
-        G += _scaled_identity(k, damping)
-        # G is symmetric: G.T is the column-major view LAPACK takes without a copy. clean=1
-        # zeroes the upper triangle, which the triangular inverse below must not see.
-        L, info = _potrf(G.T, lower=1, clean=1, overwrite_a=1)
-        if info == 0:
-            Linv, info = _trtri(L, lower=1, overwrite_c=1)
-        if info != 0:
-            # Not positive definite: only with non-finite data (damping > 0). Let the
-            # straightforward formula produce the same error or NaNs as before.
-            pinv = damped_pinv(JN, damping)
-            qdd = qdd + pinv @ r
-            if i < last:
-                N = (np.eye(nv) if N is None else N) - pinv @ JN
-            continue
-        # With W = L^-1 JN: JN' G^-1 r = W' (L^-1 r) and JN' G^-1 JN = W'W.
-        W = Linv.dot(JN)
-        qdd += Linv.dot(r).dot(W)
-        if i < last:
-            P = W.T.dot(W)
-            N = np.subtract(_scaled_identity(nv, 1.0) if N is None else N, P)
-    return qdd
+    qdd += JN' G^-1 (xdd_des - jdot_v - J_i qdd) and N_{i+1} = N_i - JN' G^-1 JN, computed by
+    the compiled `wbc_kernels.prioritized` (Cholesky G = L L', W = L^-1 JN:
+    JN' G^-1 r = W' L^-1 r and JN' G^-1 JN = W'W). Non-finite task data give NaNs."""
+    if not tasks:
+        return np.zeros(nv)
+    J = np.concatenate([t.J for t in tasks], axis=0)
+    r = np.concatenate([np.asarray(t.xdd_des) - np.asarray(t.jdot_v) for t in tasks])
+    ends = np.cumsum([t.J.shape[0] for t in tasks]).astype(np.int64)
+    return prioritized_rows(J, r, ends, damping)
+
+
+def prioritized_rows(
+    J: FloatArray, r: FloatArray, ends: npt.NDArray[np.int64], damping: float = 1e-6
+) -> FloatArray:
+    """`prioritized_acceleration` on stacked rows: J (n, nv), r = xdd_des - Jdot v (n,), and
+    the end row of each priority level (ends[-1] == n)."""
+    try:
+        return np.asarray(
+            _kernels.prioritized(
+                np.ascontiguousarray(J, dtype=np.float64),
+                np.ascontiguousarray(r, dtype=np.float64),
+                np.ascontiguousarray(ends, dtype=np.int64),
+                float(damping),
+            )
+        )
+    except np.linalg.LinAlgError:
+        # Not positive definite: cannot happen with finite data and damping > 0.
+        return np.full(J.shape[1], np.nan)
 
 
 @dataclass(frozen=True, slots=True)
@@ -146,13 +123,17 @@ class StanceContact:
 
     @staticmethod
     def from_world(J: FloatArray, yaw: float, wrench_world: FloatArray) -> StanceContact:
-        """The contact for a world wrench [F; M] (6,) at the sole: w5 = [R_z' F; (R_z' M)_y,
-        (R_z' M)_z] with R_z the foot's yaw rotation (the moment about the foot's long axis
-        is dropped: a line foot cannot take it)."""
-        c, s = math.cos(yaw), math.sin(yaw)
-        fx, fy, fz, mx, my, mz = wrench_world.tolist()
-        w5 = np.array([c * fx + s * fy, c * fy - s * fx, fz, c * my - s * mx, mz])
-        return StanceContact(J, yaw, w5)
+        """The contact for a world wrench [F; M] (6,) at the sole (`wrench_world_to_w5`)."""
+        return StanceContact(J, yaw, wrench_world_to_w5(yaw, wrench_world))
+
+
+def wrench_world_to_w5(yaw: float, wrench_world: FloatArray) -> FloatArray:
+    """w5 = [R_z' F; (R_z' M)_y, (R_z' M)_z] (5,) of a world wrench [F; M] (6,) at a sole
+    with yaw rotation R_z (the moment about the foot's long axis is dropped: a line foot
+    cannot take it)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    fx, fy, fz, mx, my, mz = wrench_world.tolist()
+    return np.array([c * fx + s * fy, c * fy - s * fx, fz, c * my - s * mx, mz])
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,45 +152,12 @@ class WbcOutput:
 
 
 class _Workspace:
-    """Buffers of the reduced QP for one number of stance feet `nc` (m = 5 nc variables):
-    the constant contact rows and bounds, the wrench maps, the stacked Jacobians."""
+    """What the reduced QP needs for one number of stance feet `nc` (m = 5 nc variables):
+    the wrench weights and the solver."""
 
-    def __init__(
-        self,
-        nc: int,
-        tau_limits: FloatArray,
-        s: WbcSettings,
-        C5: FloatArray,
-        lo5: FloatArray,
-        hi5: FloatArray,
-    ) -> None:
-        m = 5 * nc
-        nj = tau_limits.shape[0]
-        nv = nj + NV_BASE
-        rows_c = C5.shape[0]
-        self.C = np.zeros((nj + rows_c * nc, m))
-        self.C5 = np.zeros((rows_c * nc, m))
-        for i in range(nc):
-            self.C5[rows_c * i : rows_c * (i + 1), 5 * i : 5 * i + 5] = C5
-        self.C[nj:] = self.C5
-        # Bounds on the rows: [-tau_limits; contact lo] - shift <= C delta_w <= [tau_limits;
-        # contact hi] - shift, shift = [joint torques at delta_w = 0; C5 w5].
-        self.lo = np.concatenate([-tau_limits, np.tile(lo5, nc)])
-        self.hi = np.concatenate([tau_limits, np.tile(hi5, nc)])
-        self.shift = np.empty(self.C.shape[0])
-        self.l = np.empty(self.C.shape[0])
-        self.u = np.empty(self.C.shape[0])
+    def __init__(self, nc: int, s: WbcSettings) -> None:
         w = np.tile([s.weight_force] * 3 + [s.weight_moment] * 2, nc)
         self.H_w = np.diag(2.0 * w)
-        # T maps the stacked w5 (m,) to the stacked world wrenches (6 nc,); the entries that
-        # depend on the feet's yaw are written every tick.
-        self.T = np.zeros((6 * nc, m))
-        for i in range(nc):
-            self.T[6 * i + 2, 5 * i + 2] = 1.0
-            self.T[6 * i + 5, 5 * i + 4] = 1.0
-        self.Jc = np.empty((6 * nc, nv))
-        self.w5 = np.empty(m)
-        self.rhs = np.empty((NV_BASE, 1 + m), order="F")
         # Bounds met to 1e-9 (N, N m): the reduced QP's optimum then equals the full QP's to
         # well below the generic path's own accuracy (eps_abs 1e-6). DAQP needed at most 3
         # iterations on the recorded ticks; max_iter 200 only stops a runaway.
@@ -288,9 +236,40 @@ class WholeBodyQp:
         `tau_ext` (nv,) are the other generalised forces acting on the robot (held object's
         weight through the hands, J_e' F_ext)."""
         if self.settings.lean and stance:
-            out = self._solve_lean(M, h, qdd_cmd, stance, tau_ext)
+            out = self._solve_lean(
+                M,
+                h,
+                qdd_cmd,
+                np.concatenate([c.J for c in stance], axis=0),
+                np.array([c.yaw for c in stance], dtype=float),
+                np.concatenate([c.w5 for c in stance]),
+                tau_ext,
+            )
             if out is not None:
                 return out
+        return self._solve_generic(M, h, qdd_cmd, stance, tau_ext)
+
+    def solve_arrays(
+        self,
+        M: FloatArray,
+        h: FloatArray,
+        qdd_cmd: FloatArray,
+        Jc: FloatArray,
+        yaws: FloatArray,
+        w5: FloatArray,
+        tau_ext: FloatArray,
+    ) -> WbcOutput:
+        """`solve` for the control loop: the stance feet as stacked arrays, sole Jacobians
+        Jc (6 nc, nv), foot yaws (nc,) and MPC wrenches w5 (5 nc,)."""
+        nc = yaws.shape[0]
+        if self.settings.lean and nc:
+            out = self._solve_lean(M, h, qdd_cmd, Jc, yaws, w5, tau_ext)
+            if out is not None:
+                return out
+        stance = [
+            StanceContact(Jc[6 * i : 6 * i + 6], float(yaws[i]), w5[5 * i : 5 * i + 5])
+            for i in range(nc)
+        ]
         return self._solve_generic(M, h, qdd_cmd, stance, tau_ext)
 
     def _solve_generic(
@@ -323,7 +302,7 @@ class WholeBodyQp:
     def _workspace(self, nc: int) -> _Workspace:
         ws = self._ws.get(nc)
         if ws is None:
-            ws = _Workspace(nc, self.tau_limits, self.settings, self._C5, self._lo5, self._hi5)
+            ws = _Workspace(nc, self.settings)
             self._ws[nc] = ws
         return ws
 
@@ -332,71 +311,55 @@ class WholeBodyQp:
         M: FloatArray,
         h: FloatArray,
         qdd_cmd: FloatArray,
-        stance: list[StanceContact],
+        Jc: FloatArray,
+        yaws: FloatArray,
+        w5: FloatArray,
         tau_ext: FloatArray,
     ) -> WbcOutput | None:
-        """The reduced QP (module docstring); None when the generic path must take over."""
+        """The reduced QP (module docstring), built by the compiled
+        `wbc_kernels.lean_build`; when its unconstrained minimiser meets every bound that is
+        the solution (iterations 0), else DAQP finishes. None when the generic path must
+        take over."""
         t0 = time.perf_counter()
-        nv = M.shape[0]
-        nc = len(stance)
+        nc = yaws.shape[0]
         ws = self._workspace(nc)
-        T, Jc, w5 = ws.T, ws.Jc, ws.w5
-        for i, c in enumerate(stance):
-            cy, sy = math.cos(c.yaw), math.sin(c.yaw)
-            r, k = 6 * i, 5 * i
-            T[r, k] = cy
-            T[r, k + 1] = -sy
-            T[r + 1, k] = sy
-            T[r + 1, k + 1] = cy
-            T[r + 3, k + 3] = -sy
-            T[r + 4, k + 3] = cy
-            Jc[r : r + 6] = c.J
-            w5[k : k + 5] = c.w5
-        JtW = Jc.T.dot(T)  # (nv, m): generalised force of delta_w
-        a = M.dot(qdd_cmd)
-        a += h
-        a -= tau_ext
-        a -= JtW.dot(w5)
-        # Base rows: M_bb delta_b = -a_b + (J'W)_b delta_w, i.e. delta_b = -Y_0 + K delta_w
-        # with [Y_0, K] = M_bb^-1 [a_b, (J'W)_b].
-        Lb, info = _potrf(M[:NV_BASE, :NV_BASE], lower=1, clean=0)
-        if info != 0:
+        f64 = np.float64
+        try:
+            H, g, C, lo, hi, tau0, K, Y0, y, found = _kernels.lean_build(
+                np.ascontiguousarray(M, dtype=f64),
+                np.ascontiguousarray(h, dtype=f64),
+                np.ascontiguousarray(qdd_cmd, dtype=f64),
+                np.ascontiguousarray(tau_ext, dtype=f64),
+                np.ascontiguousarray(Jc, dtype=f64),
+                np.ascontiguousarray(yaws, dtype=f64),
+                np.ascontiguousarray(w5, dtype=f64),
+                self.settings.weight_base,
+                ws.H_w,
+                self._C5,
+                self._lo5,
+                self._hi5,
+                self.tau_limits,
+                ws.qp.settings.eps_abs,
+            )
+        except np.linalg.LinAlgError:
             return None
-        rhs = ws.rhs
-        rhs[:, 0] = a[:NV_BASE]
-        rhs[:, 1:] = JtW[:NV_BASE]
-        Y = _potrs(Lb, rhs, lower=1, overwrite_b=1)[0]
-        K = Y[:, 1:]
-        wb2 = 2.0 * self.settings.weight_base
-        H = K.T.dot(K)
-        H *= wb2
-        H += ws.H_w
-        g = K.T.dot(Y[:, 0])
-        g *= -wb2
-        # Joint rows: tau_j = a_j - M_jb Y_0 + (M_jb K - (J'W)_j) delta_w.
-        Q = M[NV_BASE:, :NV_BASE].dot(Y)
-        nj = nv - NV_BASE
-        C = ws.C
-        np.subtract(Q[:, 1:], JtW[NV_BASE:], out=C[:nj])
-        shift = ws.shift
-        tau0 = shift[:nj]
-        np.subtract(a[NV_BASE:], Q[:, 0], out=tau0)
-        ws.C5.dot(w5, out=shift[nj:])
-        np.subtract(ws.lo, shift, out=ws.l)
-        np.subtract(ws.hi, shift, out=ws.u)
+        if found < 0:
+            return None
         t1 = time.perf_counter()
-        y, status, iterations = ws.qp.solve_x(H, g, C, ws.l, ws.u)
+        if found == 1:
+            status, iterations = "solved", 0
+        else:
+            y, status, iterations = ws.qp.solve_x(H, g, C, lo, hi)
         if status in ("max_iterations", "numerical_error"):
             return None
         ok = status == "solved"
         if ok:
-            tau = tau0 + C[:nj].dot(y)
-            delta_base = K.dot(y)
-            delta_base -= Y[:, 0]
+            tau, delta_base = _kernels.lean_finish(tau0, C, K, Y0, y)
             w5_out = tuple(w5[5 * i : 5 * i + 5] + y[5 * i : 5 * i + 5] for i in range(nc))
         else:
-            # As the generic path: no relaxation, x = 0.
-            tau = a[NV_BASE:].copy()
+            # As the generic path: no relaxation at all (delta_b = 0, delta_w = 0), i.e. the
+            # joint rows of a = tau0 + M_jb Y0.
+            tau = tau0 + M[NV_BASE:, :NV_BASE].dot(Y0)
             delta_base = np.zeros(NV_BASE)
             w5_out = tuple(w5[5 * i : 5 * i + 5].copy() for i in range(nc))
         return WbcOutput(

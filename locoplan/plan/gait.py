@@ -155,6 +155,16 @@ class ContactSchedule:
             return None
         return float(self.swing_end[f][i])
 
+    def stance_starts(self, foot: int | str, times: npt.ArrayLike) -> FloatArray:
+        """`stance_start` at each time (n,): touchdown times (s), NaN for the initial stance."""
+        f = side_index(foot)
+        t = np.asarray(times, dtype=float)
+        ends = self.swing_end[f]
+        if ends.size == 0:
+            return np.full(t.shape, np.nan)
+        i = np.searchsorted(self.swing_start[f], t, side="right") - 1
+        return np.where(i >= 0, ends[np.maximum(i, 0)], np.nan)
+
     def block_at(self, t: float) -> GaitBlock | None:
         """The gait block (locomotion task) whose [start, end) contains t, or None."""
         for block in self.blocks:

@@ -115,6 +115,10 @@ class Plan:
         touchdown ending it; None for the initial stance (no touchdown before t)."""
         return self.contacts.stance_start(foot, t)
 
+    def stance_starts(self, foot: int | str, times: npt.ArrayLike) -> FloatArray:
+        """`stance_start` at each time (n,) -> (n,) s, NaN for the initial stance."""
+        return self.contacts.stance_starts(foot, times)
+
     def gait_period_at(self, t: float) -> float:
         """Gait period (s) of the locomotion task running at t, else the scenario's nominal."""
         block = self.contacts.block_at(t)

@@ -195,6 +195,27 @@ class PinocchioRobot:
         acc = pin.getFrameClassicalAcceleration(self.model, self.data, self.frame_id(name), _LWA)
         return np.array(acc.vector)
 
+    def frames_kinematics(
+        self, names: tuple[str, ...]
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Positions (n, 3), rotations (n, 3, 3), Jacobians (n, 6, nv) and drifts (n, 6) of
+        several frames at the last update, stacked for the control loop (the same values as
+        `frame_position`, `frame_rotation`, `frame_jacobian` and `frame_jdot_v`)."""
+        model, data = self.model, self.data
+        n = len(names)
+        p = np.empty((n, 3))
+        R = np.empty((n, 3, 3))
+        J = np.empty((n, 6, model.nv))
+        dJv = np.empty((n, 6))
+        for i, name in enumerate(names):
+            fid = self.frame_id(name)
+            placement = data.oMf[fid]
+            p[i] = placement.translation
+            R[i] = placement.rotation
+            J[i] = pin.getFrameJacobian(model, data, fid, _LWA)
+            dJv[i] = pin.getFrameClassicalAcceleration(model, data, fid, _LWA).vector
+        return p, R, J, dJv
+
     def base_pose(self) -> Pose:
         """Trunk (free-flyer) placement: p_base_world and R_base_to_world."""
         return self.frame_pose(self.desc.trunk_body)
