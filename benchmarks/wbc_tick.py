@@ -2,8 +2,8 @@
 
 Records the whole-body controller's inputs from a closed-loop run of a scenario (default:
 the first seconds of scenarios/walk-square.yaml, stepping, turning and contact switches), or
-loads a recording, then replays every tick through `build_tasks`,
-`prioritized_acceleration` and `WholeBodyQp.solve` and prints median / p99 per piece (best of
+loads a recording, then replays every tick through the controller's path (`wbc_kernels.stack_tasks`,
+`prioritized_rows`, `WholeBodyQp.solve_arrays`) and prints median / p99 per piece (best of
 --repeat passes per tick, so that other processes on the machine count less) and how far the
 torques are from the recorded ones. --cold runs unrelated numpy work before each tick, as
 MuJoCo, the MPC and the logger do in the closed loop (it evicts caches: the closed loop's
@@ -25,8 +25,9 @@ from typing import Any
 import numpy as np
 
 import locoplan.control.controller as controller_module
-from locoplan.control.tasks import TaskGains, build_tasks
-from locoplan.control.wbc import StanceContact, WholeBodyQp, prioritized_acceleration
+from locoplan.control.tasks import TaskGains
+from locoplan.control.wbc import StanceContact, WholeBodyQp, prioritized_rows
+from locoplan.control.wbc_kernels import stack_tasks
 from locoplan.plan import compile_plan
 from locoplan.robot.description import load_robot_description
 from locoplan.scenario import load_scenario_file
@@ -50,72 +51,73 @@ def record(scenario_path: str, seconds: float, every: int) -> dict[str, np.ndarr
     current: dict[str, Any] = {}
     count = [0]
     prev_stance: list[tuple[bool, ...]] = [()]
-    orig_build = controller_module.build_tasks
-    orig_solve = WholeBodyQp.solve
+    orig_stack = controller_module.stack_tasks
+    orig_solve = WholeBodyQp.solve_arrays
 
-    def rec_build(g: TaskGains, *args: Any) -> Any:
+    def rec_stack(gains: np.ndarray, *args: Any) -> Any:
         (q, v, R, omega, p_des, v_des, yaw_des, yaw_rate_des, J_base, dJv_base, stance) = args[:11]
-        (J_feet, dJv_feet, v_feet, p_feet, R_feet, swing, J_hands, dJv_hands, hand_acc) = args[11:]
+        (J_feet, dJv_feet, v_feet, p_feet, R_feet, n_swing, sw, sw_yaw) = args[11:19]
+        (J_hands, dJv_hands, hand_acc) = args[19:]
         current.clear()
-        sw = np.zeros((2, 3, 3))
-        sw_yaw = np.zeros(2)
-        for i, (p, vv, a, y) in enumerate(swing):
-            sw[i] = (p, vv, a)
-            sw_yaw[i] = y
+        packed = np.asarray(gains, dtype=float)
+        sizes = [3, 3, 3, 3, 1, 1, 1, 1]
+        split = np.split(packed, np.cumsum(sizes)[:-1])
         current.update(
-            gains=[np.atleast_1d(np.asarray(getattr(g, f), dtype=float)) for f in GAIN_FIELDS],
-            q=q,
-            v=v,
-            R=R,
-            omega=omega,
-            p_des=p_des,
-            v_des=v_des,
+            gains=list(split),
+            q=q.copy(),
+            v=v.copy(),
+            R=R.copy(),
+            omega=omega.copy(),
+            p_des=p_des.copy(),
+            v_des=v_des.copy(),
             yaw_des=yaw_des,
             yaw_rate_des=yaw_rate_des,
-            J_base=J_base,
-            dJv_base=dJv_base,
+            J_base=J_base.copy(),
+            dJv_base=dJv_base.copy(),
             stance=np.array(stance, dtype=bool),
-            J_feet=np.array(J_feet),
-            dJv_feet=np.array(dJv_feet),
-            v_feet=np.array(v_feet),
-            p_feet=np.array(p_feet),
-            R_feet=np.array(R_feet),
-            n_swing=len(swing),
-            swing_pva=sw,
-            swing_yaw=sw_yaw,
-            J_hands=np.array(J_hands),
-            dJv_hands=np.array(dJv_hands),
-            hand_acc=np.array(hand_acc),
+            J_feet=J_feet.copy(),
+            dJv_feet=dJv_feet.copy(),
+            v_feet=v_feet.copy(),
+            p_feet=p_feet.copy(),
+            R_feet=R_feet.copy(),
+            n_swing=n_swing,
+            swing_pva=sw.copy(),
+            swing_yaw=sw_yaw.copy(),
+            J_hands=J_hands.copy(),
+            dJv_hands=dJv_hands.copy(),
+            hand_acc=hand_acc.copy(),
         )
-        return orig_build(g, *args)
+        return orig_stack(gains, *args)
 
     def rec_solve(
         self: WholeBodyQp,
         M: np.ndarray,
         h: np.ndarray,
         qdd_cmd: np.ndarray,
-        stance: list[StanceContact],
+        Jc: np.ndarray,
+        yaws: np.ndarray,
+        w5: np.ndarray,
         tau_ext: np.ndarray,
     ) -> Any:
-        out = orig_solve(self, M, h, qdd_cmd, stance, tau_ext)
+        out = orig_solve(self, M, h, qdd_cmd, Jc, yaws, w5, tau_ext)
         count[0] += 1
         st = tuple(bool(x) for x in current.get("stance", ()))
         switched = st != prev_stance[0]
         prev_stance[0] = st
         if current and ((count[0] - 1) % every == 0 or switched):
             yaw = np.zeros(2)
-            w5 = np.zeros((2, 5))
+            w5_feet = np.zeros((2, 5))
             ks = np.flatnonzero(current["stance"])
-            for k, c in zip(ks, stance, strict=True):
-                yaw[k] = c.yaw
-                w5[k] = c.w5
+            for i, k in enumerate(ks):
+                yaw[k] = yaws[i]
+                w5_feet[k] = w5[5 * i : 5 * i + 5]
             row = dict(current)
             row.update(
                 M=M.copy(),
                 h=h.copy(),
                 qdd_cmd=qdd_cmd.copy(),
                 contact_yaw=yaw,
-                contact_w5=w5,
+                contact_w5=w5_feet,
                 tau_ext=tau_ext.copy(),
                 tau=out.tau.copy(),
                 wbc_ok=out.ok,
@@ -123,8 +125,8 @@ def record(scenario_path: str, seconds: float, every: int) -> dict[str, np.ndarr
             rows.append(row)
         return out
 
-    controller_module.build_tasks = rec_build  # type: ignore[assignment]
-    WholeBodyQp.solve = rec_solve  # type: ignore[method-assign]
+    controller_module.stack_tasks = rec_stack  # type: ignore[assignment]
+    WholeBodyQp.solve_arrays = rec_solve  # type: ignore[method-assign]
     try:
         start = sc.robot_start
         loop = ClosedLoop(
@@ -137,8 +139,8 @@ def record(scenario_path: str, seconds: float, every: int) -> dict[str, np.ndarr
         )
         loop.run(min(seconds, plan.t_end))
     finally:
-        controller_module.build_tasks = orig_build
-        WholeBodyQp.solve = orig_solve  # type: ignore[method-assign]
+        controller_module.stack_tasks = orig_stack
+        WholeBodyQp.solve_arrays = orig_solve  # type: ignore[method-assign]
     out: dict[str, np.ndarray] = {}
     for key in rows[0]:
         if key == "gains":
@@ -212,31 +214,82 @@ def _other_work(rng: np.random.Generator) -> None:
         _ = {str(i): i for i in range(100)}
 
 
-def replay(rec: dict[str, np.ndarray], repeat: int, cold: bool) -> dict[str, np.ndarray]:
-    """Per-tick times (s) of each piece, best of `repeat`, and the torque error (N m).
+def kernel_inputs(rec: dict[str, np.ndarray], i: int) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+    """Tick i as the controller passes it: (`stack_tasks` arguments, `solve_arrays` arguments
+    after qdd_cmd, i.e. M, h, Jc, yaws, w5, tau_ext)."""
+    args, _ = tick_inputs(rec, i)
+    gains = args[0].packed()
+    stance = rec["stance"][i]
+    kargs = (
+        gains,
+        rec["q"][i],
+        rec["v"][i],
+        rec["R"][i],
+        rec["omega"][i],
+        rec["p_des"][i],
+        rec["v_des"][i],
+        float(rec["yaw_des"][i]),
+        float(rec["yaw_rate_des"][i]),
+        rec["J_base"][i],
+        rec["dJv_base"][i],
+        np.array(stance, dtype=np.bool_),
+        rec["J_feet"][i],
+        rec["dJv_feet"][i],
+        rec["v_feet"][i],
+        rec["p_feet"][i],
+        rec["R_feet"][i],
+        int(rec["n_swing"][i]),
+        rec["swing_pva"][i],
+        rec["swing_yaw"][i],
+        rec["J_hands"][i],
+        rec["dJv_hands"][i],
+        rec["hand_acc"][i],
+    )
+    idx = np.flatnonzero(stance)
+    qargs = (
+        rec["M"][i],
+        rec["h"][i],
+        rec["J_feet"][i][idx].reshape(-1, rec["J_feet"].shape[-1]),
+        rec["contact_yaw"][i][idx],
+        rec["contact_w5"][i][idx].ravel(),
+        rec["tau_ext"][i],
+    )
+    return kargs, qargs
 
-    Each repetition has its own `WholeBodyQp`, which sees every tick once in order: its
-    active-set guess comes from the previous tick as in the closed loop. With `cold`,
-    `_other_work` runs before every timed call."""
+
+def _other_work(rng: np.random.Generator) -> None:
+    """Unrelated numpy and Python work, as MuJoCo, the MPC and the logger do between two WBC
+    ticks in the closed loop: it evicts caches and branch history."""
+    for _ in range(3):
+        A = rng.random((60, 60))
+        np.linalg.cholesky(A @ A.T + np.eye(60))
+        sum(i * 0.5 for i in range(300))
+        _ = {str(i): i for i in range(100)}
+
+
+def replay(rec: dict[str, np.ndarray], repeat: int, cold: bool) -> dict[str, np.ndarray]:
+    """Per-tick times (s) of each piece, best of `repeat`, and the torque error (N m), on the
+    controller's path: `stack_tasks`, `prioritized_rows`, `WholeBodyQp.solve_arrays` (QP
+    build, then DAQP only when a bound binds). With `cold`, `_other_work` runs before every
+    timed call."""
     n = rec["q"].shape[0]
-    wbcs = [WholeBodyQp(rec["tau_limits"]) for _ in range(repeat)]
+    wbc = WholeBodyQp(rec["tau_limits"])
     rng = np.random.default_rng(0)
-    res: dict[str, list[float]] = {
-        k: [] for k in ("tasks", "projection", "qp_build", "qp_solve", "total", "tau_err")
-    }
+    keys = ("tasks", "projection", "qp_build", "qp_solve", "total")
+    res: dict[str, list[float]] = {k: [] for k in (*keys, "tau_err")}
     for i in range(n):
-        args, rest = tick_inputs(rec, i)
-        best = dict.fromkeys(("tasks", "projection", "qp_build", "qp_solve", "total"), math.inf)
+        kargs, (M, h, Jc, yaws, w5, tau_ext) = kernel_inputs(rec, i)
+        best = dict.fromkeys(keys, math.inf)
         out = None
-        for wbc in wbcs:
+        for _ in range(repeat):
             if cold:
                 _other_work(rng)
             t0 = time.perf_counter()
-            tasks = build_tasks(*args)
+            J, b, a, ends = stack_tasks(*kargs)
             t1 = time.perf_counter()
-            qdd = prioritized_acceleration(tasks, 22)
+            qdd = prioritized_rows(J, a - b, ends)
             t2 = time.perf_counter()
-            out = wbc.solve(rest["M"], rest["h"], qdd, rest["contacts"], rest["tau_ext"])
+            out = wbc.solve_arrays(M, h, qdd, Jc, yaws, w5, tau_ext)
             t3 = time.perf_counter()
             for key, val in (
                 ("tasks", t1 - t0),
