@@ -19,10 +19,19 @@ unconstrained minimiser met every bound (daqp not run) and the fallbacks taken.
 from __future__ import annotations
 
 import argparse
+import hashlib
+import io
 import os
+import pickle
+import subprocess
+import sys
+import tarfile
+import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import asdict, fields, replace
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -30,6 +39,7 @@ from locoplan.control import srbd
 from locoplan.control.mpc import MpcInput, MpcSettings, MultiContactMpc
 from locoplan.control.qp import QpSettings
 
+ROOT = Path(__file__).resolve().parents[1]
 N = 20
 DT = 0.03
 MASS = 17.0
@@ -203,6 +213,139 @@ def _fmt(a: np.ndarray) -> str:
     return f"{np.median(a):6.0f} / {np.percentile(a, 99):6.0f}"
 
 
+# --- recorded closed-loop inputs, before vs now ------------------------------------------
+
+
+def record_scenario(path: Path) -> dict[str, Any]:
+    """Run the scenario closed loop in MuJoCo (the real controller, no log) and return the
+    MPC's settings and every MpcInput it met, as plain dicts (readable by older code)."""
+    from locoplan.scenario import load_scenario_file
+    from locoplan.sim.run import RunOptions, run_scenario
+
+    settings: list[dict[str, Any]] = []
+    inputs: list[dict[str, Any]] = []
+    update = MultiContactMpc.update
+
+    def recording(self: MultiContactMpc, inp: MpcInput) -> Any:
+        if not settings:
+            settings.append(asdict(self.settings))
+        inputs.append({f.name: getattr(inp, f.name) for f in fields(inp)})
+        return update(self, inp)
+
+    loaded = load_scenario_file(path)
+    MultiContactMpc.update = recording  # type: ignore[method-assign]
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            run_scenario(loaded.scenario, loaded.text, RunOptions(out_dir=Path(tmp), log=False))
+    finally:
+        MultiContactMpc.update = update  # type: ignore[method-assign]
+    return {"settings": settings[0], "inputs": inputs}
+
+
+def recorded(path: Path, again: bool) -> Path:
+    """The recorded inputs of a scenario, cached in runs/ per scenario text (re-recorded
+    with ``again``, e.g. after controller changes)."""
+    digest = hashlib.sha1(path.read_bytes()).hexdigest()[:10]
+    cache = ROOT / "runs" / f"mpc-inputs-{path.stem}-{digest}.pkl"
+    if again or not cache.exists():
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        with cache.open("wb") as f:
+            pickle.dump(record_scenario(path), f)
+    return cache
+
+
+def replay(cache: Path, repeat: int) -> dict[str, Any]:
+    """Replay the recorded inputs in order through a fresh MultiContactMpc, ``repeat`` times
+    (the replay with the lowest median is kept): per-update wall and CPU times (us),
+    iterations, and the solutions U."""
+    with cache.open("rb") as f:
+        rec = pickle.load(f)
+    st = dict(rec["settings"])
+    st["qp"] = QpSettings(**st["qp"])
+    if st.get("relaxed_qp") is not None:
+        st["relaxed_qp"] = QpSettings(**st["relaxed_qp"])
+    settings = MpcSettings(**st)
+    inputs = [MpcInput(**d) for d in rec["inputs"]]
+    MultiContactMpc(settings).update(inputs[0])  # compiles or loads what needs it
+    best: dict[str, Any] | None = None
+    for _ in range(repeat):
+        mpc = MultiContactMpc(settings)
+        wall, cpu, iters, Us = [], [], [], []
+        for inp in inputs:
+            c0 = time.thread_time()
+            t0 = time.perf_counter()
+            sol = mpc.update(inp)
+            wall.append(time.perf_counter() - t0)
+            cpu.append(time.thread_time() - c0)
+            iters.append(sol.iterations)
+            Us.append(sol.U)
+        run = {
+            "wall": (np.array(wall) * 1e6).tolist(),
+            "cpu": (np.array(cpu) * 1e6).tolist(),
+            "iters": iters,
+            "U": np.array(Us),
+        }
+        if best is None or np.median(run["wall"]) < np.median(best["wall"]):
+            best = run
+    assert best is not None
+    return best
+
+
+def replay_at(rev: str, cache: Path, repeat: int) -> dict[str, Any]:
+    """`replay` with the locoplan package of git revision ``rev``, in a subprocess."""
+    with tempfile.TemporaryDirectory() as tmp:
+        archive = subprocess.run(
+            ["git", "-C", str(ROOT), "archive", rev, "locoplan"],
+            check=True,
+            capture_output=True,
+        ).stdout
+        with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
+            tar.extractall(tmp, filter="data")
+        out = Path(tmp) / "replay.npz"
+        env = dict(os.environ, PYTHONPATH=tmp, OMP_NUM_THREADS="1")
+        cmd = [sys.executable, __file__, "--replay", str(cache), str(out), str(repeat)]
+        subprocess.run(cmd, check=True, env=env, cwd=tmp)
+        with np.load(out) as d:
+            return {k: d[k] for k in d.files}
+
+
+def _replay_main(cache: str, out: str, repeat: str) -> None:
+    r = replay(Path(cache), int(repeat))
+    np.savez(out, wall=r["wall"], cpu=r["cpu"], iters=r["iters"], U=r["U"])
+
+
+def compare_recorded(scenarios: list[str], before: str, repeat: int, again: bool) -> None:
+    rev = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "--short", before],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout.strip()
+    print(
+        "recorded closed-loop MPC inputs (MuJoCo, the real controller), replayed in order; "
+        f"one update = build + solve; times in us, median / p99 (best of {repeat} replays)"
+    )
+    print(
+        f"{'scenario':20s} {'updates':>7s} {'constr.':>7s} {'before ' + rev:>17s}"
+        f" {'now':>15s} {'now, CPU':>15s}  max |dU|/|U|"
+    )
+    for name in scenarios:
+        path = Path(name)
+        cache = recorded(path, again)
+        now = replay(cache, repeat)
+        old = replay_at(before, cache, repeat)
+        U_now, U_old = np.asarray(now["U"]), np.asarray(old["U"])
+        k = U_now.shape[0]
+        diff = np.linalg.norm((U_now - U_old).reshape(k, -1), axis=1)
+        scale = np.maximum(np.linalg.norm(U_old.reshape(k, -1), axis=1), 1e-300)
+        constrained = 100.0 * float(np.mean(np.asarray(now["iters"]) > 0))
+        print(
+            f"{path.stem:20s} {k:7d} {constrained:6.0f}% {_fmt(np.asarray(old['wall'])):>17s}"
+            f" {_fmt(np.asarray(now['wall']))} {_fmt(np.asarray(now['cpu']))}"
+            f"  {float(np.max(diff / scale)):9.1e}"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--updates", type=int, default=300)
@@ -213,9 +356,24 @@ def main() -> None:
     ap.add_argument(
         "--only", action="append", default=[], help="run combinations whose name contains this"
     )
+    ap.add_argument(
+        "--scenario",
+        action="append",
+        default=[],
+        help="instead: replay the MPC inputs of this task script's closed loop (recorded once "
+        "into runs/), now and at --before",
+    )
+    ap.add_argument("--before", default="69f8286", help="git revision to compare against")
+    ap.add_argument("--rerecord", action="store_true", help="record the scenarios again")
+    if len(sys.argv) == 5 and sys.argv[1] == "--replay":  # the subprocess of replay_at
+        _replay_main(*sys.argv[2:])
+        return
     args = ap.parse_args()
     if os.environ.get("OMP_NUM_THREADS") != "1":
         print("warning: set OMP_NUM_THREADS=1 for single-core figures")
+    if args.scenario:
+        compare_recorded(args.scenario, args.before, args.repeat, args.rerecord)
+        return
     inertia = INERTIA_COMPOSITE if args.composite else INERTIA_TRUNK
     scenarios = {
         "standing": record_inputs(standing_contact, args.updates, inertia, noise=args.noise),

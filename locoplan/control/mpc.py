@@ -24,15 +24,19 @@ Condensed form (default): X = x_free + G w, with H = G'QG + R and g = G'Q(x_free
 G is never formed: every block of G is an affine function of the step distance (the SRBD's A
 is nilpotent), so H is assembled from per-step features Phi_k (6 x 10: the effect of step k's
 wrench on omega and pdot) and a per-step-pair kernel K[k, l] (6 x 6) that depends only on the
-linearisation yaws (cached) -- H[k, l] = Phi_k' K[k, l] Phi_l (see `mpc_terms`). The
-sparse form keeps the states as variables with the dynamics as equalities (for comparison).
+linearisation yaws (cached) -- H[k, l] = Phi_k' K[k, l] Phi_l (see `mpc_terms`). For
+k >= l, K[k, l] splits into a term of k and a term of k times one of l, so H is one product
+of two n x 12 generator matrices, mirrored (`mpc_kernels`, compiled with numba). The sparse
+form keeps the states as variables with the dynamics as equalities (for comparison).
 
 Solving (default): DAQP (a dual active-set solver, `qp` backend "daqp") on the QP's
-least-distance form y = U^-1 (x - x_u), H^-1 = U U', which the MPC computes from cached
-blocks (`MultiContactMpc._least_distance`): the unconstrained minimiser x_u when it meets
-every bound (most standing updates), else DAQP from a cold start. On failure the relaxed QP
+least-distance form y = U^-1 (x - x_u), H^-1 = U U', which the MPC computes from the same
+generators (`MultiContactMpc._least_distance`: a structured Cholesky factor in O(N) small
+products): the unconstrained minimiser x_u when it meets every bound (most updates while
+walking), else DAQP from a cold start on U and W built then. On failure the relaxed QP
 (f_min = 0), then the previous solution shifted. benchmarks/mpc_qp.py compares the
-alternatives (proxsuite and piqp stay selectable).
+alternatives (proxsuite and piqp stay selectable) and, with --scenario, the update's time on
+recorded closed-loop inputs before and after the compiled kernels.
 """
 
 from __future__ import annotations
@@ -46,14 +50,13 @@ import numpy.typing as npt
 import scipy.linalg
 import scipy.sparse as sp
 
-from locoplan.control import srbd
+from locoplan.control import mpc_kernels, srbd
 from locoplan.control.mpc_terms import (
     Kernel,
     StepTerms,
     build_kernel,
     propagate,
     step_terms,
-    suffix_sum,
     wrench_rows,
 )
 from locoplan.control.qp import (
@@ -70,8 +73,7 @@ from locoplan.exceptions import SolverFailure
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 
-_potrf, _trtri = scipy.linalg.get_lapack_funcs(("potrf", "trtri"), dtype=np.float64)
-_trsm, _trsv = scipy.linalg.get_blas_funcs(("trsm", "trsv"), dtype=np.float64)
+(_trtri,) = scipy.linalg.get_lapack_funcs(("trtri",), dtype=np.float64)
 
 MODELS: Final[tuple[str, ...]] = ("external-force", "combined")
 FORMULATIONS: Final[tuple[str, ...]] = ("condensed", "sparse")
@@ -259,14 +261,18 @@ class MpcSolution:
     qp: QpSolution | None = field(repr=False)
 
 
-@dataclass(slots=True)
-class _LdBuffers:
-    """U (n, n) and W of the least-distance form; ``left_done``: W's columns of the cached
-    leading block are filled."""
+@dataclass(frozen=True, slots=True)
+class _Constraints:
+    """The wrench constraints of n_fs stance foot-steps: rows C (R n_fs, 5 n_fs) with
+    l <= C w <= u, the box x_lower <= w <= x_upper, and ``box`` the variables with a finite
+    bound (the vertical forces)."""
 
-    U: FloatArray
-    W: FloatArray
-    left_done: bool = False
+    C: FloatArray
+    l: FloatArray
+    u: FloatArray
+    x_lower: FloatArray
+    x_upper: FloatArray
+    box: npt.NDArray[np.int64]
 
 
 class MultiContactMpc:
@@ -280,52 +286,48 @@ class MultiContactMpc:
         r = np.asarray(s.r_diag, dtype=np.float64)
         # Per foot [Fx, Fy, Fz, My, Mz] weights from the paper's [F1, F2, M1, M2] order.
         self._r_foot = np.array([np.r_[r[0:3], r[6:8]], np.r_[r[3:6], r[8:10]]])
-        self._r_full = np.tile(self._r_foot.reshape(-1), s.horizon)
+        self._r_foot_flat = np.ascontiguousarray(self._r_foot.reshape(-1))
+        self._r_full = np.tile(self._r_foot_flat, s.horizon)
         self._rows, self._lo, self._hi = wrench_rows(s)
         self._kernel_key: bytes | None = None
         self._kernel: Kernel | None = None
-        self._cons_cache: dict[tuple[int, float, float], tuple[FloatArray, ...]] = {}
+        self._cons_cache: dict[tuple[int, float, float], _Constraints] = {}
         self._prev_U: FloatArray | None = None
         self._prev_contact: BoolArray | None = None
         self._prev_t = 0.0
         # Previous QP's active constraints and stance foot-steps (k, foot), for the hint.
         self._prev_active: npt.NDArray[np.intp] | None = None
         self._prev_fs: npt.NDArray[np.intp] | None = None
-        # Leading block of H (steps 1..N-1), its Cholesky factor L11 and (once needed)
-        # U11 = L11^-T, reused while the block repeats; U and W buffers of the least-distance
-        # form (read by the solver only, rewritten by every update that needs them).
-        self._ld_block: FloatArray | None = None
-        self._ld_L11: FloatArray | None = None
-        self._ld_U11: FloatArray | None = None
-        self._ld_buffers: dict[tuple[int, int], _LdBuffers] = {}
-        self._gather_cache: dict[bytes, npt.NDArray[np.intp]] = {}
 
     # --- caches ----------------------------------------------------------------------------
 
     def _get_kernel(self, yaw_lin: FloatArray, Ib: FloatArray) -> Kernel:
         key = yaw_lin.tobytes() + Ib.tobytes()
         if self._kernel is None or key != self._kernel_key:
-            s = self.settings
-            Ib_inv = np.asarray(np.linalg.inv(Ib), dtype=np.float64)
-            self._kernel = build_kernel(s.horizon, s.dt, self._q, yaw_lin, Ib_inv)
+            self._kernel = build_kernel(self.settings.dt, self._q, yaw_lin, Ib)
             self._kernel_key = key
         return self._kernel
 
-    def _constraints(self, n_fs: int, f_min: float, f_max: float) -> tuple[FloatArray, ...]:
-        """(C, l, u, x_lower, x_upper) for n_fs stance foot-steps, cached."""
+    def _constraints(self, n_fs: int, f_min: float, f_max: float) -> _Constraints:
+        """The constraints of n_fs stance foot-steps, cached."""
         key = (n_fs, f_min, f_max)
         got = self._cons_cache.get(key)
         if got is not None:
             return got
-        C = np.asarray(np.kron(np.eye(n_fs), self._rows), dtype=np.float64)
-        l = np.tile(self._lo, n_fs)
-        u = np.tile(self._hi, n_fs)
         lb = np.tile(np.array([-np.inf, -np.inf, f_min, -np.inf, -np.inf]), n_fs)
         ub = np.tile(np.array([np.inf, np.inf, f_max, np.inf, np.inf]), n_fs)
+        cons = _Constraints(
+            C=np.asarray(np.kron(np.eye(n_fs), self._rows), dtype=np.float64),
+            l=np.tile(self._lo, n_fs),
+            u=np.tile(self._hi, n_fs),
+            x_lower=lb,
+            x_upper=ub,
+            box=np.flatnonzero(np.isfinite(lb) | np.isfinite(ub)).astype(np.int64),
+        )
         if len(self._cons_cache) > 64:
             self._cons_cache.clear()
-        self._cons_cache[key] = (C, l, u, lb, ub)
-        return (C, l, u, lb, ub)
+        self._cons_cache[key] = cons
+        return cons
 
     # --- problem construction --------------------------------------------------------------
 
@@ -337,37 +339,28 @@ class MultiContactMpc:
         x_free: FloatArray,
         f_min: float,
         f_max: float,
-    ) -> QpProblem:
-        s = self.settings
-        N, dt, q = s.horizon, s.dt, self._q
-        Phi = st.Phi
-        # H_full[k, l] = Phi_k' K[k, l] Phi_l, as two batched products.
-        Y = kern.K_cols @ Phi  # (N, 6N, 10): column block l of K Phi_bd
-        Y2 = Y.transpose(1, 0, 2).reshape(N, 6, 10 * N)
-        H = (np.swapaxes(Phi, 1, 2) @ Y2).reshape(10 * N, 10 * N)
-        H.reshape(-1)[:: 10 * N + 1] += self._r_full
-        # Gradient: g_k = Phi_k' lambda_k with the adjoint lambda from suffix sums.
-        qe = q[:12] * (x_free[:, :12] - inp.x_ref[:, :12])  # Q (x - x_ref), 12 weighted states
-        u_th, w_p = qe[:, 0:3], qe[:, 3:6]
-        k_idx = np.arange(N, dtype=np.float64)[:, None]
-        Z = np.empty((N, 12))
-        Z[:, 0:3] = qe[:, 6:9] + dt * (kern.CT @ u_th[:, :, None])[:, :, 0]
-        Z[:, 3:6] = u_th
-        Z[:, 6:9] = qe[:, 9:12] + dt * k_idx * w_p
-        Z[:, 9:12] = w_p
-        SZ = suffix_sum(Z)
-        lam = np.empty((N, 6))
-        lam[:, 0:3] = SZ[:, 0:3] - dt * (kern.ET @ SZ[:, 3:6, None])[:, :, 0]
-        lam[:, 3:6] = SZ[:, 6:9] - dt * (k_idx - 0.5) * SZ[:, 9:12]
-        g = (lam[:, None, :] @ Phi).reshape(-1)
+    ) -> tuple[QpProblem, FloatArray, FloatArray]:
+        """The condensed QP and the generators (Lam, Gam) of its Hessian (`mpc_kernels`)."""
+        # H and g over the stance variables in the QP's order (see `mpc_kernels.condensed`).
+        H, g, Lam, Gam = mpc_kernels.condensed(
+            self.settings.dt,
+            self._q,
+            self._r_foot_flat,
+            st.Phi,
+            st.cols,
+            kern.C,
+            kern.E,
+            kern.P,
+            kern.V,
+            kern.alpha,
+            kern.beta,
+            x_free,
+            np.ascontiguousarray(inp.x_ref, dtype=np.float64),
+        )
         cols = st.cols
-        # Stance variables in the QP's order (steps 1..N-1, then step 0), by one flat gather
-        # with a cached index (two-axis fancy indexing costs ~10x more at this size).
-        n_sel = cols.shape[0]
-        H = H.reshape(-1).take(self._gather_index(cols)).reshape(n_sel, n_sel)
-        g = g[cols]
-        C, l, u, lb, ub = self._constraints(cols.shape[0] // 5, f_min, f_max)
-        return QpProblem(H=H, g=g, C=C, l=l, u=u, x_lower=lb, x_upper=ub)
+        c = self._constraints(cols.shape[0] // 5, f_min, f_max)
+        qp = QpProblem(H=H, g=g, C=c.C, l=c.l, u=c.u, x_lower=c.x_lower, x_upper=c.x_upper)
+        return qp, Lam, Gam
 
     def _sparse(
         self, inp: MpcInput, st: StepTerms, kern: Kernel, f_min: float, f_max: float
@@ -389,11 +382,8 @@ class MultiContactMpc:
         B12[:, 9:12] = Phi[:, 3:6]
         # Affine part of each step: gravity and the known external wrench.
         g0 = inp.x0[srbd.GRAV]
-        a_w = np.zeros((N, 3))
-        a_v = np.broadcast_to(dt * g0, (N, 3))
-        if st.tau_ext is not None and st.f_ext is not None:
-            a_w = dt * np.einsum("kij,kj->ki", st.Iinv, st.tau_ext)
-            a_v = dt * (st.f_ext / st.mass[:, None] + g0)
+        a_w = dt * np.einsum("kij,kj->ki", st.Iinv, st.tau_ext)
+        a_v = dt * (st.f_ext / st.mass[:, None] + g0)
         c = np.zeros((N, nxr))
         c[:, 0:3] = 0.5 * dt * np.einsum("kij,kj->ki", kern.RzT, a_w)
         c[:, 3:6] = 0.5 * dt * a_v
@@ -429,7 +419,8 @@ class MultiContactMpc:
         b[0] += A12[0] @ inp.x0[:nxr]
         H = sp.diags(np.concatenate([np.tile(q12, N), self._r_full[cols]]), format="csc")
         g = np.concatenate([-(q12 * inp.x_ref[:, :nxr]).reshape(-1), np.zeros(nu)])
-        C_w, l, u, lbw, ubw = self._constraints(nu // 5, f_min, f_max)
+        cons = self._constraints(nu // 5, f_min, f_max)
+        C_w, l, u, lbw, ubw = cons.C, cons.l, cons.u, cons.x_lower, cons.x_upper
         C = sp.hstack([sp.csc_matrix((C_w.shape[0], nxr * N)), sp.csc_matrix(C_w)], format="csc")
         lb = np.concatenate([np.full(nxr * N, -np.inf), lbw])
         ub = np.concatenate([np.full(nxr * N, np.inf), ubw])
@@ -469,12 +460,14 @@ class MultiContactMpc:
                 0,
                 None,
             )
-        qp = self._problem(inp, st, kern, x_free, s.f_min, s.f_max)
+        qp, Lam, Gam = self._problem(inp, st, kern, x_free, s.f_min, s.f_max)
         shift = self._shift(inp)
-        hint = self._active_hint(st.cols, qp, shift) if s.formulation == "condensed" else None
+        # Only daqp with warm_start reads the hint (the other backends ignore it).
+        warm = s.qp.warm_start and s.formulation == "condensed"
+        hint = self._active_hint(st.cols, qp, shift) if warm else None
         ldp = None
-        if s.formulation == "condensed" and s.backend == "daqp":
-            ldp = self._least_distance(qp, int(np.count_nonzero(st.cols < 10)))
+        if Lam is not None and Gam is not None and s.backend == "daqp":
+            ldp = self._least_distance(qp, Lam, Gam, st.cols)
         t1 = time.perf_counter()
         sol = self._solver.solve(qp, active_hint=hint, least_distance=ldp)
         t2 = time.perf_counter()
@@ -487,7 +480,7 @@ class MultiContactMpc:
             if not s.fallback:
                 raise SolverFailure(inp.t, "mpc", s.backend, sol.status)
             t3 = time.perf_counter()
-            relaxed_qp = self._problem(inp, st, kern, x_free, 0.0, max(s.f_max, s.f_min))
+            relaxed_qp = self._problem(inp, st, kern, x_free, 0.0, max(s.f_max, s.f_min))[0]
             relaxed_settings = s.relaxed_qp if s.relaxed_qp is not None else _relaxed(s.qp)
             # Same H and the same finite box sides (f_min = 0 is finite): same form.
             relaxed = QpSolver(s.backend, relaxed_settings).solve(relaxed_qp, least_distance=ldp)
@@ -509,15 +502,17 @@ class MultiContactMpc:
             fallback = "shifted"
         U, X = self._finish(inp, st, kern, U_foot3)
         self._prev_U, self._prev_contact, self._prev_t = U_foot3, inp.contact.copy(), inp.t
-        if used.ok and s.formulation == "condensed":
+        if used.ok and warm:
             self._prev_active = active_constraint_ids(used)
             self._prev_fs = st.cols[::5] // 5
         else:
             self._prev_active = None
         F0 = U[0, :, 0:3].copy()
-        c0, s0 = st.cos_foot[0], st.sin_foot[0]
-        My0, Mz0 = U[0, :, 3], U[0, :, 4]
-        M0 = np.stack([-s0 * My0, c0 * My0, Mz0], axis=1)
+        # The first step's moments in the world: My' about the foot's y axis, Mz' about z.
+        M0 = np.empty((2, 3))
+        M0[:, 0] = -st.sin_foot[0] * U[0, :, 3]
+        M0[:, 1] = st.cos_foot[0] * U[0, :, 3]
+        M0[:, 2] = U[0, :, 4]
         outside += time.perf_counter() - t4
         return MpcSolution(
             ok=sol.ok,
@@ -544,7 +539,7 @@ class MultiContactMpc:
         kern = self._get_kernel(np.ascontiguousarray(inp.yaw_lin, dtype=np.float64), Ib)
         st = step_terms(inp, s.dt, kern.Iinv, Ib)
         x_free = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, st.tau_ext, st.f_ext, s.dt)
-        return self._problem(inp, st, kern, x_free, s.f_min, s.f_max)
+        return self._problem(inp, st, kern, x_free, s.f_min, s.f_max)[0]
 
     def _problem(
         self,
@@ -554,145 +549,62 @@ class MultiContactMpc:
         x_free: FloatArray,
         f_min: float,
         f_max: float,
-    ) -> QpProblem:
+    ) -> tuple[QpProblem, FloatArray | None, FloatArray | None]:
+        """The QP in the configured formulation, with the Hessian's generators (condensed)."""
         if self.settings.formulation == "sparse":
-            return self._sparse(inp, st, kern, f_min, f_max)
+            return self._sparse(inp, st, kern, f_min, f_max), None, None
         return self._condensed(inp, st, kern, x_free, f_min, f_max)
 
     def _finish(
         self, inp: MpcInput, st: StepTerms, kern: Kernel, U_foot: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
         """U in the output convention and the predicted states from the foot-frame wrenches."""
-        c, s = st.cos_foot, st.sin_foot
-        F_world = np.empty((U_foot.shape[0], 2, 3))
-        F_world[..., 0] = c * U_foot[..., 0] - s * U_foot[..., 1]
-        F_world[..., 1] = s * U_foot[..., 0] + c * U_foot[..., 1]
-        F_world[..., 2] = U_foot[..., 2]
-        tau = np.einsum("kfia,kfa->ki", st.Tw, U_foot)
-        force = F_world.sum(axis=1)
-        if st.tau_ext is not None and st.f_ext is not None:
-            tau += st.tau_ext
-            force += st.f_ext
+        U, tau, force = mpc_kernels.finish(
+            np.ascontiguousarray(U_foot, dtype=np.float64),
+            st.Tw,
+            st.cos_foot,
+            st.sin_foot,
+            st.tau_ext,
+            st.f_ext,
+        )
         X = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, tau, force, self.settings.dt)
-        U = np.concatenate([F_world, U_foot[..., 3:5]], axis=2)
         return U, X
 
-    def _gather_index(self, cols: npt.NDArray[np.intp]) -> npt.NDArray[np.intp]:
-        """Flat indices of H_full[cols][:, cols], cached per stance pattern."""
-        key = cols.tobytes()
-        idx = self._gather_cache.get(key)
-        if idx is None:
-            n_full = 10 * self.settings.horizon
-            idx = (cols[:, None] * n_full + cols[None, :]).reshape(-1)
-            if len(self._gather_cache) >= 32:
-                self._gather_cache.clear()
-            self._gather_cache[key] = idx
-        return idx
+    def _least_distance(
+        self, qp: QpProblem, Lam: FloatArray, Gam: FloatArray, cols: npt.NDArray[np.int64]
+    ) -> LeastDistanceForm | None:
+        """The `LeastDistanceForm` of the condensed QP from the generators of its Hessian.
 
-    def _least_distance(self, qp: QpProblem, n0: int) -> LeastDistanceForm | None:
-        """The `LeastDistanceForm` of the condensed QP, whose last n0 variables are step 0's.
-
-        H = L L' with L = [[L11, 0], [L21, L22]]. The leading block of H (steps 1..N-1)
-        depends only on the plan, so L11 is cached and reused while the block repeats (always
-        when standing); then only step 0's rows are new: L21 = H21 L11^-T and
-        L22 = chol(H22 - L21 L21'). x_u = -H^-1 g by substitution with L. U = L^-T and W are
-        built only when x_u violates a bound (the solver asks): U11 = L11^-T (cached with
-        L11), U22 = L22^-T, U12 = -U11 L21' U22, U = [[U11, U12], [0, U22]]; C is
-        block-diagonal (the same wrench rows per stance foot-step), so C U is one batched
-        product of the rows with U's 5-row slices, of which only step 0's columns change
-        while the block repeats. None if H is not positive definite (the solver then gets the
-        plain problem and reports it).
+        H = L L' with the structured Cholesky factor of `mpc_kernels.factor` (O(N) small
+        products, in the factor order of the steps N-1..1, then 0); x_u = -H^-1 g by
+        substitution with it. U and W are built only when x_u violates a bound (the solver
+        asks): L as a dense matrix (one BLAS product), U_f = L^-T by LAPACK's trtri, then U
+        is U_f with its rows in the QP's numbering (H^-1 = U U' in the QP's variables; the
+        solver's y are in the factor order) and W = [U[box]; C U] with C block-diagonal (the
+        same wrench rows per stance foot-step). None if H is not positive definite (the
+        solver then gets the plain problem and reports it).
         """
-        H, g = qp.H, qp.g
-        n = H.shape[0]
-        nA = n - n0
-        A = H[:nA, :nA]
-        cached = (
-            self._ld_block is not None
-            and self._ld_L11 is not None
-            and self._ld_block.shape == A.shape
-            and np.array_equal(self._ld_block, A)
-        )
-        if not cached:
-            self._ld_block = self._ld_L11 = self._ld_U11 = None
-            self._ld_buffers.clear()
-            L11_new = np.zeros((0, 0), order="F")
-            if nA:  # LAPACK rejects empty matrices (stance at step 0 only)
-                L11_new, info = _potrf(A.T, lower=1, clean=1, overwrite_a=0)
-                if info != 0:
-                    return None
-            self._ld_block, self._ld_L11 = A.copy(), L11_new
-        L11 = self._ld_L11
-        assert L11 is not None
-        # L21' = L11^-1 H12 (nA, n0); L22 = chol(H22 - L21 L21').
-        L21T = np.zeros((nA, n0))
-        L22 = np.zeros((n0, n0), order="F")
-        if n0:
-            if nA:
-                L21T = np.asarray(_trsm(1.0, L11, H[:nA, nA:], lower=1))
-            L22, info = _potrf(H[nA:, nA:] - L21T.T @ L21T, lower=1, clean=1, overwrite_a=0)
-            if info != 0:
-                return None
-        # x_u = -H^-1 g: L z = -g, then L' x = z, by blocks.
-        x_u = np.empty(n)
-        z1 = np.asarray(_trsv(L11, -g[:nA], lower=1)) if nA else np.zeros(0)
-        if n0:
-            z2 = np.asarray(_trsv(L22, -g[nA:] - L21T.T @ z1, lower=1))
-            x_u[nA:] = _trsv(L22, z2, lower=1, trans=1)
-            z1 = z1 - L21T @ x_u[nA:]
-        if nA:
-            x_u[:nA] = _trsv(L11, z1, lower=1, trans=1)
-        box = np.flatnonzero(
-            (np.isfinite(qp.x_lower) if qp.x_lower is not None else np.zeros(n, dtype=bool))
-            | (np.isfinite(qp.x_upper) if qp.x_upper is not None else np.zeros(n, dtype=bool))
-        )
+        start, size, perm = mpc_kernels.factor_blocks(cols)
+        L_diag, Z, ok = mpc_kernels.factor(qp.H, Gam, Lam, start, size)
+        if not ok:
+            return None
+        x_u = mpc_kernels.factor_solve(-qp.g, Gam, L_diag, Z, start, size)
+        box = self._constraints(cols.shape[0] // 5, self.settings.f_min, self.settings.f_max).box
         built: list[tuple[FloatArray, FloatArray]] = []
+        rows = self._rows
 
         def factors() -> tuple[FloatArray, FloatArray]:
             if not built:  # once per update (the relaxed retry asks again)
-                built.append(self._least_distance_factors(n, n0, L21T, L22, box))
-            return built[0]
-
-        return LeastDistanceForm(x_u=x_u, factors=factors)
-
-    def _least_distance_factors(
-        self, n: int, n0: int, L21T: FloatArray, L22: FloatArray, box: npt.NDArray[np.intp]
-    ) -> tuple[FloatArray, FloatArray]:
-        """U and W of `_least_distance` (see there), in buffers re-used across updates."""
-        nA = n - n0
-        if self._ld_U11 is None:
-            assert self._ld_L11 is not None
-            U11 = np.zeros((0, 0))
-            if nA:
-                # L11^-T as the inverse of the upper factor L11' (LAPACK's upper trtri is
-                # 25 % faster here than the lower one: 66 vs 89 us at n = 120).
-                U11_F, info = _trtri(self._ld_L11.T, lower=0)
+                L = mpc_kernels.dense_factor(Gam, L_diag, Z, size, perm)
+                # L.T is L' as an F-contiguous array: trtri inverts the upper factor in place
+                # (LAPACK's upper trtri is 25 % faster here than the lower one).
+                U_f, info = _trtri(L.T, lower=0, overwrite_c=1)
                 # The diagonal of a Cholesky factor is positive: trtri cannot fail.
                 assert info == 0
-                U11 = np.ascontiguousarray(U11_F)
-            self._ld_U11 = U11
-        U11 = self._ld_U11
-        n_fs, R, n_b = n // 5, self._rows.shape[0], box.shape[0]
-        bufs = self._ld_buffers.get((n, n_b))
-        if bufs is None:
-            bufs = _LdBuffers(np.zeros((n, n)), np.zeros((n_b + n_fs * R, n)))
-            bufs.U[:nA, :nA] = U11
-            self._ld_buffers[(n, n_b)] = bufs
-        U, W = bufs.U, bufs.W
-        if n0:
-            U22, info = _trtri(L22.T, lower=0)
-            assert info == 0
-            U[:nA, nA:] = -(U11 @ (L21T @ U22))
-            U[nA:, nA:] = U22
-        # W = [U[box]; C U]. Columns :nA of U, hence of W, are U11's and zeros: they change
-        # only with the block (the buffers are then new), so later updates rewrite step 0's
-        # columns only.
-        cols = slice(nA, n) if bufs.left_done else slice(0, n)
-        W[:n_b, cols] = U[box, cols]
-        W_rows = W[n_b:].reshape(n_fs, R, n)
-        W_rows[:, :, cols] = self._rows @ U[:, cols].reshape(n_fs, 5, -1)
-        bufs.left_done = True
-        return U, W
+                built.append(mpc_kernels.least_distance_rows(U_f, perm, rows, box))
+            return built[0]
+
+        return LeastDistanceForm(x_u=x_u, factors=factors, box=box)
 
     def _shift(self, inp: MpcInput) -> int:
         """Whole MPC steps elapsed since the previous update (from ``MpcInput.t``)."""

@@ -393,11 +393,14 @@ class LeastDistanceForm:
     is DAQP's own internal form: it reaches it with an O(n^3) transformation in plain C
     (2.5 ms at n = 200), which a caller that knows the structure of its problem (cached
     factor blocks, a block-diagonal C) computes far faster. The multipliers of W's rows are
-    the QP's (the same constraints, in y). No array is kept after the solve.
+    the QP's (the same constraints, in y). No array is kept after the solve. ``box``: the
+    caller's ``box_index`` when it has it (W was built with it): the solver then takes it as
+    given instead of finding the finite bounds itself.
     """
 
     x_u: FloatArray
     factors: Callable[[], tuple[FloatArray, FloatArray]]
+    box: npt.NDArray[np.integer[Any]] | None = None
 
 
 class QpSolver:
@@ -821,13 +824,16 @@ class QpSolver:
     ) -> QpSolution:
         s = self.settings
         n, m = p.n, p.n_in
-        box = np.zeros(0, dtype=np.intp)
+        box: npt.NDArray[np.integer[Any]] = np.zeros(0, dtype=np.intp)
         lo_parts: list[FloatArray] = []
         hi_parts: list[FloatArray] = []
         if p.has_box:
             x_lo = _inf_fill(p.x_lower, n, -1.0)
             x_hi = _inf_fill(p.x_upper, n, 1.0)
-            box = np.flatnonzero(np.isfinite(x_lo) | np.isfinite(x_hi))
+            if form.box is not None:
+                box = form.box
+            else:
+                box = np.flatnonzero(np.isfinite(x_lo) | np.isfinite(x_hi))
             lo_parts.append(x_lo[box])
             hi_parts.append(x_hi[box])
         if p.C is not None:
@@ -929,7 +935,7 @@ class QpSolver:
         z_box: FloatArray,
         reused: bool = False,
     ) -> QpSolution:
-        ok = status == "solved" and bool(np.all(np.isfinite(x)))
+        ok = status == "solved" and bool(np.isfinite(x).all())
         # A failed solve leaves no active set to warm-start from.
         self._has_result = ok
         return QpSolution(
