@@ -29,6 +29,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
+from locoplan.control import wbc_kernels
 from locoplan.control.contact import ContactLimits
 from locoplan.control.mpc import MpcInput, MpcSettings, MpcSolution, MultiContactMpc
 from locoplan.control.swing import min_jerk, swing_point
@@ -181,6 +182,8 @@ class LocoManipulationController:
         ).packed()
         self._hand_kp = s.hand_kp_acc
         self._hand_kd = s.hand_kd_acc
+        if s.mapping == "wbc":
+            wbc_kernels.warm_up(robot.nv)
         self._nominal_geometry()
 
     # -- set-up --------------------------------------------------------------------------------

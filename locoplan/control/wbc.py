@@ -170,7 +170,9 @@ class WholeBodyQp:
 
     def __init__(self, tau_limits: FloatArray, settings: WbcSettings | None = None) -> None:
         self.settings = settings or WbcSettings()
-        self.tau_limits = np.asarray(tau_limits, dtype=float)
+        # A writable copy: a read-only array would be another argument type to the compiled
+        # kernels (one more compilation).
+        self.tau_limits = np.array(tau_limits, dtype=float)
         self._solver = QpSolver(
             self.settings.backend, QpSettings(eps_abs=1e-6, check_duality_gap=False, max_iter=100)
         )

@@ -374,3 +374,60 @@ def lean_finish(
     tau = tau0 + C[:nj].dot(y)
     delta_base = K.dot(y) - Y0
     return tau, delta_base
+
+
+def warm_up(nv: int) -> None:
+    """Compile (or load from the cache) every kernel for the argument types the controller
+    passes, on a small well-posed problem, so that the first control tick does not pay for
+    the compilation (about 10 s on a machine without the cache)."""
+    f64 = np.float64
+    eye3 = np.eye(3)
+    J = np.zeros((6, nv))
+    J[:, :6] = np.eye(6)
+    J_feet = np.stack([J, J])
+    rows = stack_tasks(
+        np.ones(N_GAINS),
+        np.zeros(nv + 1),
+        np.zeros(nv),
+        eye3,
+        np.zeros(3),
+        np.zeros(3),
+        np.zeros(3),
+        0.0,
+        0.0,
+        J.copy(),
+        np.zeros(6),
+        np.array([True, False]),
+        J_feet,
+        np.zeros((2, 6)),
+        np.zeros((2, 6)),
+        np.zeros((2, 3)),
+        np.stack([eye3, eye3]),
+        1,
+        np.zeros((2, 3, 3)),
+        np.zeros(2),
+        np.ascontiguousarray(J_feet[:, :3]),
+        np.zeros((2, 3)),
+        np.zeros((2, 3)),
+    )
+    Jt, b, a, ends = rows
+    prioritized(Jt, a - b, ends, 1e-6)
+    M = np.eye(nv, dtype=f64)
+    C5 = np.zeros((1, 5))
+    _, _, C, _, _, tau0, K, Y0, y, _ = lean_build(
+        M,
+        np.zeros(nv),
+        np.zeros(nv),
+        np.zeros(nv),
+        J.copy(),
+        np.zeros(1),
+        np.zeros(5),
+        0.1,
+        np.eye(5),
+        C5,
+        np.zeros(1),
+        np.zeros(1),
+        np.ones(nv - NV_BASE),
+        1e-9,
+    )
+    lean_finish(tau0, C, K, Y0, y)
