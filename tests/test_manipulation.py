@@ -78,7 +78,7 @@ def test_holds_fourteen_kilograms_standing(tmp_path: Path) -> None:
     assert result.metrics["objects"]["block"]["held"]
 
 
-def test_pick_walk_drop_places_the_box(tmp_path: Path) -> None:
+def test_pick_walk_drop_places_the_box_within_the_torque_limits(tmp_path: Path) -> None:
     result = _run(tmp_path, ROOT / "scenarios" / "pick-walk-drop.yaml")
     rec = result.record
     box = np.asarray(rec.object_positions["box"])
@@ -86,7 +86,11 @@ def test_pick_walk_drop_places_the_box(tmp_path: Path) -> None:
     # Carried 0.5 m or more (horizontally, start to end) and resting on its platform.
     assert np.linalg.norm(box[-1, :2] - box[0, :2]) >= 0.5
     assert result.metrics["objects"]["box"]["on"] == "platform"
-    assert result.metrics["expectations"]["placed.box"]["ok"]
+    # Every expectation of the script holds, max_torque_ratio included: where the paper's
+    # WBC QP has no solution in the loaded turn, the joint-relaxed QP keeps the torques
+    # within their limits (no clip at all).
+    assert result.metrics["passed"], result.metrics["expectations"]
+    assert result.metrics["torque_clips"] == 0
 
 
 def test_throw_lands_near_the_ballistic_prediction(tmp_path: Path) -> None:

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from wbc_fixtures import contacts, n_ticks, recording, task_args
 
-from locoplan.control.contact import ContactLimits
+from locoplan.control.contact import ContactLimits, wrench5_to_world
 from locoplan.control.qp import QpSettings, QpSolver
 from locoplan.control.tasks import build_tasks, rot_z
 from locoplan.control.wbc import (
@@ -49,7 +49,10 @@ def _random_tasks(rng: np.random.Generator, sizes: list[int], nv: int) -> list[A
 
 def _tight_reference(tau_limits: np.ndarray, limits: ContactLimits | None = None) -> WholeBodyQp:
     """The full QP through the generic path, solved far tighter than the default 1e-6."""
-    wbc = WholeBodyQp(tau_limits, WbcSettings(lean=False, limits=limits or ContactLimits()))
+    wbc = WholeBodyQp(
+        tau_limits,
+        WbcSettings(lean=False, limits=limits or ContactLimits(), weight_joint=0.0),
+    )
     wbc._solver = QpSolver("proxsuite", QpSettings(eps_abs=1e-11, max_iter=1000))
     return wbc
 
@@ -168,7 +171,8 @@ def test_lean_qp_with_binding_torque_limits(scale: float) -> None:
     rec = recording()
     for stride in (7, 3):
         limits = scale * np.abs(rec["tau"][::stride]).max(axis=0) + 0.05
-        lean = WholeBodyQp(limits)
+        # The paper's QP on both paths (no joint relaxation when it has no solution).
+        lean = WholeBodyQp(limits, WbcSettings(weight_joint=0.0))
         ref = _tight_reference(limits)
         for i in range(0, n_ticks(), stride):
             args = _tick(i)
@@ -276,3 +280,35 @@ def test_solve_arrays_equals_solve_and_skips_the_solver_when_nothing_binds() -> 
         np.testing.assert_array_equal(got.tau, want.tau)
         kinds.add(got.iterations == 0)
     assert kinds == {True, False}
+
+
+@pytest.mark.parametrize("scale", [0.6, 0.3])
+def test_joint_relaxation_meets_the_torque_limits_when_the_paper_qp_cannot(scale: float) -> None:
+    """Torque limits shrunk until the paper's QP has no solution on some ticks: the relaxed
+    QP answers there with torques within the limits, and M (qdd + delta) + h =
+    S' tau + J' W w + tau_ext holds with its base and joint relaxations."""
+    rec = recording()
+    limits = scale * np.abs(rec["tau"]).max(axis=0) + 0.05
+    strict = WholeBodyQp(limits, WbcSettings(weight_joint=0.0))
+    wbc = WholeBodyQp(limits)
+    n_relaxed = 0
+    for i in range(0, n_ticks(), 2):
+        M, h, qdd, stance, tau_ext = _tick(i)
+        if strict.solve(M, h, qdd, stance, tau_ext).ok:
+            continue
+        out = wbc.solve(M, h, qdd, stance, tau_ext)
+        assert out.ok and out.status == "solved_relaxed_joints"
+        assert out.delta_joint is not None
+        n_relaxed += 1
+        # Bounds met to the solver's eps_abs (1e-6) after the affine map (|B| < 100).
+        assert np.all(np.abs(out.tau) <= limits + 1e-4)
+        qdd_r = qdd.copy()
+        qdd_r[:6] += out.delta_base
+        qdd_r[6:] += out.delta_joint
+        rhs = tau_ext.copy()
+        rhs[6:] += out.tau
+        for c, w5 in zip(stance, out.w5, strict=True):
+            rhs += c.J.T @ (wrench5_to_world(c.yaw) @ w5)
+        # The equalities to the solver's accuracy through M (entries < 10 kg m^2).
+        np.testing.assert_allclose(M @ qdd_r + h, rhs, rtol=0, atol=1e-4)
+    assert n_relaxed > 0

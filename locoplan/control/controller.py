@@ -58,6 +58,7 @@ LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (g
 LOAD_RAMP_DOWN = 0.6  # s
 LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
 FEET = ("L", "R")
+CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
 
 
 def wrap_angle(a: float) -> float:
@@ -546,7 +547,8 @@ class LocoManipulationController:
             tau = wbc_out.tau
         wbc_time = time.perf_counter() - t_w
         tau_clipped = np.clip(tau, -self.tau_limits, self.tau_limits)
-        n_clipped = int(np.count_nonzero(np.abs(tau) > self.tau_limits))
+        # A torque at its limit to rounding (a QP's active bound) is not a clip.
+        n_clipped = int(np.count_nonzero(np.abs(tau) > self.tau_limits * (1.0 + CLIP_RTOL)))
         return ControlOutput(
             tau=tau,
             tau_clipped=tau_clipped,

@@ -41,6 +41,7 @@ from locoplan.control.qp import LeanDenseQp, QpProblem, QpSettings, QpSolver
 FloatArray = npt.NDArray[np.float64]
 
 NV_BASE = 6
+TORQUE_MARGIN = 1e-5  # N m inside the limits for the joint-relaxed QP's torque rows
 
 
 @dataclass(frozen=True, slots=True)
@@ -110,6 +111,10 @@ class WbcSettings:
     limits: ContactLimits = field(default_factory=ContactLimits)
     backend: str = "daqp"
     lean: bool = True
+    # When no contact wrench meets the torque limits for the commanded joint accelerations,
+    # relax those too (weight per (rad/s^2)^2) instead of applying unrelaxed torques; 0 turns
+    # it off (see `WholeBodyQp.relaxed_problem`).
+    weight_joint: float = 1.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -139,7 +144,9 @@ def wrench_world_to_w5(yaw: float, wrench_world: FloatArray) -> FloatArray:
 @dataclass(frozen=True, slots=True)
 class WbcOutput:
     """Joint torques (16,), the applied contact wrenches w5 per stance foot, the base
-    acceleration relaxation (6,), QP status, build and solve times (s)."""
+    acceleration relaxation (6,), QP status, build and solve times (s), and the joint
+    acceleration relaxation (16,) when the QP had to relax those too (status
+    "solved_relaxed_joints", see `WholeBodyQp.relaxed_problem`), else None."""
 
     tau: FloatArray
     w5: tuple[FloatArray, ...]
@@ -149,6 +156,7 @@ class WbcOutput:
     iterations: int
     build_time_s: float
     solve_time_s: float
+    delta_joint: FloatArray | None = None
 
 
 class _Workspace:
@@ -225,6 +233,93 @@ class WholeBodyQp:
         problem = QpProblem(H=H, g=g, A=B[:NV_BASE], b=-a[:NV_BASE], C=C, l=lo, u=hi)
         return problem, a, B
 
+    def relaxed_problem(
+        self,
+        M: FloatArray,
+        h: FloatArray,
+        qdd_cmd: FloatArray,
+        stance: list[StanceContact],
+        tau_ext: FloatArray,
+    ) -> tuple[QpProblem, FloatArray, FloatArray]:
+        """`full_problem` with the joint accelerations relaxed as well: x = [delta_b (6);
+        delta_w (5 per stance foot); delta_qdd (nj)], cost weight `weight_joint` on
+        delta_qdd, tau_full(x) = a + B x with B's last nj columns M[:, 6:].
+
+        Why (beyond the paper, whose QP relaxes only the base accelerations and the wrenches):
+        the joint rows of qdd_cmd are fixed there, so when the torques they need exceed the
+        limits for every admissible wrench the QP has no solution, and applying the
+        unrelaxed torques (then clipping them) is what happened: 8x the hip-roll limit in
+        the loaded turn of scenarios/pick-walk-drop.yaml. With delta_qdd free the torque
+        rows can always be met (M's joint block is positive definite), so this QP is
+        feasible whenever the contact rows are; the tasks are then tracked as well as the
+        actuators allow."""
+        problem, a, B = self.full_problem(M, h, qdd_cmd, stance, tau_ext)
+        nv = M.shape[0]
+        nj = nv - NV_BASE
+        n0 = problem.n
+        n = n0 + nj
+        B2 = np.zeros((nv, n))
+        B2[:, :n0] = B
+        B2[:, n0:] = M[:, NV_BASE:]
+        H = np.zeros((n, n))
+        H[:n0, :n0] = problem.H
+        H[n0:, n0:] = 2.0 * self.settings.weight_joint * np.eye(nj)
+        assert problem.C is not None and problem.l is not None and problem.u is not None
+        C = np.zeros((problem.C.shape[0], n))
+        C[:, :n0] = problem.C
+        C[:nj] = B2[NV_BASE:]
+        # Torque rows pulled in by 1e-5 N m: the solver meets bounds to its eps_abs (1e-6),
+        # and a torque a hair over its limit would count as a clip.
+        lo, hi = problem.l.copy(), problem.u.copy()
+        lo[:nj] += TORQUE_MARGIN
+        hi[:nj] -= TORQUE_MARGIN
+        relaxed = QpProblem(H=H, g=np.zeros(n), A=B2[:NV_BASE], b=problem.b, C=C, l=lo, u=hi)
+        return relaxed, a, B2
+
+    def _solve_relaxed(
+        self,
+        M: FloatArray,
+        h: FloatArray,
+        qdd_cmd: FloatArray,
+        stance: list[StanceContact],
+        tau_ext: FloatArray,
+    ) -> WbcOutput | None:
+        """`relaxed_problem` solved; None when it has no solution either."""
+        t0 = time.perf_counter()
+        problem, a, B = self.relaxed_problem(M, h, qdd_cmd, stance, tau_ext)
+        t1 = time.perf_counter()
+        sol = self._solver.solve(problem)
+        if not sol.ok:
+            return None
+        tau_full = a + B @ sol.x
+        nc = len(stance)
+        w5 = tuple(stance[i].w5 + sol.x[NV_BASE + 5 * i : NV_BASE + 5 * i + 5] for i in range(nc))
+        return WbcOutput(
+            tau=tau_full[NV_BASE:],
+            w5=w5,
+            delta_base=sol.x[:NV_BASE].copy(),
+            ok=True,
+            status="solved_relaxed_joints",
+            iterations=sol.iterations,
+            build_time_s=t1 - t0,
+            solve_time_s=time.perf_counter() - t1,
+            delta_joint=sol.x[NV_BASE + 5 * nc :].copy(),
+        )
+
+    def _relax_if_infeasible(
+        self,
+        out: WbcOutput,
+        M: FloatArray,
+        h: FloatArray,
+        qdd_cmd: FloatArray,
+        stance: list[StanceContact],
+        tau_ext: FloatArray,
+    ) -> WbcOutput:
+        if out.ok or out.status != "primal_infeasible" or self.settings.weight_joint <= 0.0:
+            return out
+        relaxed = self._solve_relaxed(M, h, qdd_cmd, stance, tau_ext)
+        return out if relaxed is None else relaxed
+
     def solve(
         self,
         M: FloatArray,
@@ -236,20 +331,16 @@ class WholeBodyQp:
         """Torques for M qdd + h = S' tau + sum_i J_i' W_i (w5_i + delta_i) + tau_ext.
 
         `tau_ext` (nv,) are the other generalised forces acting on the robot (held object's
-        weight through the hands, J_e' F_ext)."""
-        if self.settings.lean and stance:
-            out = self._solve_lean(
-                M,
-                h,
-                qdd_cmd,
-                np.concatenate([c.J for c in stance], axis=0),
-                np.array([c.yaw for c in stance], dtype=float),
-                np.concatenate([c.w5 for c in stance]),
-                tau_ext,
-            )
-            if out is not None:
-                return out
-        return self._solve_generic(M, h, qdd_cmd, stance, tau_ext)
+        weight through the hands, J_e' F_ext). When that QP has no solution, the one with the
+        joint accelerations relaxed too (`relaxed_problem`) answers instead."""
+        nv = M.shape[0]
+        if stance:
+            Jc = np.concatenate([c.J for c in stance], axis=0)
+            w5 = np.concatenate([c.w5 for c in stance])
+        else:
+            Jc, w5 = np.zeros((0, nv)), np.zeros(0)
+        yaws = np.array([c.yaw for c in stance], dtype=float)
+        return self._solve(M, h, qdd_cmd, Jc, yaws, w5, tau_ext, stance)
 
     def solve_arrays(
         self,
@@ -263,16 +354,33 @@ class WholeBodyQp:
     ) -> WbcOutput:
         """`solve` for the control loop: the stance feet as stacked arrays, sole Jacobians
         Jc (6 nc, nv), foot yaws (nc,) and MPC wrenches w5 (5 nc,)."""
+        return self._solve(M, h, qdd_cmd, Jc, yaws, w5, tau_ext, None)
+
+    def _solve(
+        self,
+        M: FloatArray,
+        h: FloatArray,
+        qdd_cmd: FloatArray,
+        Jc: FloatArray,
+        yaws: FloatArray,
+        w5: FloatArray,
+        tau_ext: FloatArray,
+        stance: list[StanceContact] | None,
+    ) -> WbcOutput:
         nc = yaws.shape[0]
+        out = None
         if self.settings.lean and nc:
             out = self._solve_lean(M, h, qdd_cmd, Jc, yaws, w5, tau_ext)
-            if out is not None:
+            if out is not None and (out.ok or out.status != "primal_infeasible"):
                 return out
-        stance = [
-            StanceContact(Jc[6 * i : 6 * i + 6], float(yaws[i]), w5[5 * i : 5 * i + 5])
-            for i in range(nc)
-        ]
-        return self._solve_generic(M, h, qdd_cmd, stance, tau_ext)
+        if stance is None:
+            stance = [
+                StanceContact(Jc[6 * i : 6 * i + 6], float(yaws[i]), w5[5 * i : 5 * i + 5])
+                for i in range(nc)
+            ]
+        if out is None:
+            out = self._solve_generic(M, h, qdd_cmd, stance, tau_ext)
+        return self._relax_if_infeasible(out, M, h, qdd_cmd, stance, tau_ext)
 
     def _solve_generic(
         self,
