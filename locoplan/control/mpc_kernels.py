@@ -21,15 +21,17 @@ Gam_l = [A_l', A_l' E_l', B_l', l B_l'], A and B the omega and pdot rows of Phi.
 Hessian is one (n x 12) (12 x n) product (BLAS) whose block-lower part is mirrored, instead
 of N^2 small kernel products; its Cholesky factor has the same structure (`factor`).
 
-Array conventions: float64 and C-contiguous (the callers in `mpc_terms` and `mpc` make sure:
-another layout or dtype would compile a second specialisation at run time), bool masks,
-int64 indices. Variable layout: per stance (step k, foot f) the five foot-frame wrench
-components [Fx', Fy', Fz, My', Mz'], index 10 k + 5 f + a in the full layout; the QP takes
-the stance ones (``cols``) ordered steps 1..N-1, then step 0.
+Kernels use numpy's error model: a division by zero gives inf or nan, as the numpy code they
+replace did, instead of raising. Array conventions: float64 and C-contiguous (the callers in
+`mpc_terms` and `mpc` make sure: another layout or dtype would compile a second
+specialisation at run time), bool masks, int64 indices. Variable layout: per stance (step
+k, foot f) the five foot-frame wrench components [Fx', Fy', Fz, My', Mz'], index
+10 k + 5 f + a in the full layout; the QP takes the stance ones (``cols``) ordered by step
+from N-1 down to 0.
 
-The first call of each kernel compiles it (about 7 s for all of them, once per machine: the
-machine code is cached next to this file in __pycache__); tests/test_mpc_kernels.py calls
-every kernel.
+The first call of each kernel compiles it (7-10 s for all of them on this machine, once per
+machine: the machine code is cached next to this file in __pycache__, then loading it takes
+0.2 s); tests/test_mpc_kernels.py calls every kernel.
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ BoolArray = npt.NDArray[np.bool_]
 GRAVITY = 9.81
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def yaw_terms(
     dt: float, q: FloatArray, yaw_lin: FloatArray, Ib: FloatArray
 ) -> tuple[
@@ -135,7 +137,7 @@ def yaw_terms(
     return RzT, C, E, Iinv, P, V, alpha, beta
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _inv3(A: FloatArray, out: FloatArray) -> None:
     """out = A^-1 for a 3 x 3 matrix (adjugate over determinant)."""
     c00 = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
@@ -154,7 +156,7 @@ def _inv3(A: FloatArray, out: FloatArray) -> None:
     out[2, 2] = (A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]) * inv
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def step_terms(
     dt: float,
     x0: FloatArray,
@@ -297,13 +299,12 @@ def step_terms(
             Phi[k, 3, base + 1] = -kv * s
             Phi[k, 4, base + 1] = kv * c
             Phi[k, 5, base + 2] = kv
-    # Stance variables in the QP's order. Step 0's last: only they depend on the measured
-    # state (the lever arms from x0's CoM), so the leading block of H repeats while the plan
-    # does.
+    # Stance variables in the QP's order: steps N-1 down to 0. Step 0's last: only they depend
+    # on the measured state (the lever arms from x0's CoM), so the leading block of H repeats
+    # while the plan does; and in this order the factor of H has the structure of `factor`.
     cols = np.empty(5 * n_st, dtype=np.int64)
     j = 0
-    for kk in range(1, N + 1):
-        k = kk % N
+    for k in range(N - 1, -1, -1):
         for f in range(2):
             if contact[k, f]:
                 for a in range(5):
@@ -312,7 +313,7 @@ def step_terms(
     return Iinv, mass_k, tau_ext, f_ext, Tw, cos_f, sin_f, Phi, cols
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def propagate(
     x0: FloatArray,
     RzT: FloatArray,
@@ -360,7 +361,7 @@ def propagate(
     return X
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def condensed(
     dt: float,
     q: FloatArray,
@@ -447,7 +448,7 @@ def condensed(
     return H, g, Lam, Gam
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def finish(
     U_foot: FloatArray,
     Tw: FloatArray,
@@ -484,99 +485,45 @@ def finish(
     return U, tau, force
 
 
-@njit(cache=True)
-def leading_equal(A: FloatArray, B: FloatArray, m: int) -> bool:
-    """Whether the leading m x m blocks of A and B are equal (stops at the first difference)."""
-    for i in range(m):
-        for j in range(m):
-            if A[i, j] != B[i, j]:
-                return False
-    return True
-
-
-@njit(cache=True)
-def constraint_rows_times(
-    rows: FloatArray, U: FloatArray, box: IntArray, W: FloatArray, c0: int
-) -> None:
-    """W[:, c0:] = [U[box]; C U][:, c0:] with C block-diagonal: ``rows`` (R, 5) per
-    foot-step, i.e. W[n_b + R f + r] = rows[r] @ U[5 f : 5 f + 5] (n_b = len(box))."""
-    n = U.shape[1]
-    n_b = box.shape[0]
-    R = rows.shape[0]
-    n_fs = U.shape[0] // 5
-    for i in range(n_b):
-        for c in range(c0, n):
-            W[i, c] = U[box[i], c]
-    for f in range(n_fs):
-        for r in range(R):
-            out = n_b + R * f + r
-            for c in range(c0, n):
-                W[out, c] = 0.0
-            for a in range(5):
-                w = rows[r, a]
-                if w != 0.0:
-                    for c in range(c0, n):
-                        W[out, c] += w * U[5 * f + a, c]
-
-
 # --- least-distance form: a structured Cholesky factor of H --------------------------------
 #
-# The factor is computed in "factor order": the steps' blocks from the last step to step 1,
-# then step 0 (each block's variables in their QP order). Between a block a and an earlier
-# block b of that order step(a) < step(b), so H[a, b] = X_a Y_b' with the row generator
-# X = Gam and the column generator Y = Lam (n x 12 each, rows in QP order). Then the
-# Cholesky factor is L[a, b] = X_a Z_b' below the diagonal blocks, with, in order,
+# In the QP's order (steps from N-1 down to 0, a block of 5 or 10 variables per step in
+# stance), between a block a and an earlier block b step(a) < step(b), so
+# H[a, b] = X_a Y_b' with the row generator X = Gam and the column generator Y = Lam (n x 12
+# each, a row per variable). The Cholesky factor then has L[a, b] = X_a Z_b' below the
+# diagonal blocks, with, block by block,
 #     S_b  = sum_{c before b} Z_c' Z_c                  (12 x 12)
 #     L_bb L_bb' = H[b, b] - X_b S_b X_b'              (dense Cholesky of <= 10 x 10)
 #     Z_b  = L_bb^-1 (Y_b - X_b S_b)                    (n_b x 12)
 # -- O(N) small products instead of a dense O(n^3) factorisation, and solves in O(n).
 
 
-@njit(cache=True)
-def factor_blocks(cols: IntArray) -> tuple[IntArray, IntArray, IntArray]:
-    """Blocks of the factor order: (start, size) in the QP's numbering per block, and
-    ``perm`` (n,): the QP index of each factor-order position."""
+@njit(cache=True, error_model="numpy")
+def factor_blocks(cols: IntArray) -> tuple[IntArray, IntArray]:
+    """(start, size) of each step's block of variables, in the QP's order."""
     n = cols.shape[0]
     n_blocks = 0
     for j in range(n):
         if j == 0 or cols[j] // 10 != cols[j - 1] // 10:
             n_blocks += 1
-    qp_start = np.empty(n_blocks, dtype=np.int64)
-    qp_size = np.zeros(n_blocks, dtype=np.int64)
+    start = np.empty(n_blocks, dtype=np.int64)
+    size = np.zeros(n_blocks, dtype=np.int64)
     b = -1
     for j in range(n):
         if j == 0 or cols[j] // 10 != cols[j - 1] // 10:
             b += 1
-            qp_start[b] = j
-        qp_size[b] += 1
-    # QP order: steps 1..N-1 ascending, then step 0 (if in stance). Factor order: the
-    # leading blocks reversed, then step 0's.
-    has0 = n > 0 and cols[n - 1] < 10
-    n_lead = n_blocks - 1 if has0 else n_blocks
-    start = np.empty(n_blocks, dtype=np.int64)
-    size = np.empty(n_blocks, dtype=np.int64)
-    for i in range(n_lead):
-        start[i] = qp_start[n_lead - 1 - i]
-        size[i] = qp_size[n_lead - 1 - i]
-    if has0:
-        start[n_blocks - 1] = qp_start[n_blocks - 1]
-        size[n_blocks - 1] = qp_size[n_blocks - 1]
-    perm = np.empty(n, dtype=np.int64)
-    p = 0
-    for i in range(n_blocks):
-        for j in range(size[i]):
-            perm[p] = start[i] + j
-            p += 1
-    return start, size, perm
+            start[b] = j
+        size[b] += 1
+    return start, size
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def factor(
     H: FloatArray, X: FloatArray, Y: FloatArray, start: IntArray, size: IntArray
 ) -> tuple[FloatArray, FloatArray, bool]:
     """The structured Cholesky factor of H (see above): (L_diag, Z, ok) with L_diag (n, 10)
-    holding each diagonal block's lower factor in its rows (QP numbering, columns 0..n_b-1)
-    and Z (n, 12). ok is False when H is not (numerically) positive definite."""
+    holding each diagonal block's lower factor in its rows (columns 0..n_b-1) and Z (n, 12).
+    ok is False when H is not (numerically) positive definite."""
     n = H.shape[0]
     L_diag = np.zeros((n, 10))
     Z = np.zeros((n, 12))
@@ -630,7 +577,7 @@ def factor(
     return L_diag, Z, True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def factor_solve(
     rhs: FloatArray,
     X: FloatArray,
@@ -675,68 +622,70 @@ def factor_solve(
     return x
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def dense_factor(
-    X: FloatArray, L_diag: FloatArray, Z: FloatArray, size: IntArray, perm: IntArray
+    X: FloatArray, L_diag: FloatArray, Z: FloatArray, start: IntArray, size: IntArray
 ) -> FloatArray:
-    """The factor as a dense lower-triangular (n, n) array in factor order (C-contiguous)."""
-    n = perm.shape[0]
-    Xf = np.empty((n, 12))
-    Zf = np.empty((n, 12))
-    for i in range(n):
-        for a in range(12):
-            Xf[i, a] = X[perm[i], a]
-            Zf[i, a] = Z[perm[i], a]
-    L = np.dot(Xf, Zf.T)
-    f0 = 0
-    for b in range(size.shape[0]):
+    """The factor as a dense lower-triangular (n, n) C-contiguous array."""
+    n = X.shape[0]
+    L = np.dot(X, Z.T)
+    for b in range(start.shape[0]):
+        r0 = start[b]
         nb = size[b]
-        for i in range(f0, f0 + nb):
-            for j in range(f0, i + 1):
-                L[i, j] = L_diag[perm[i], j - f0]
+        for i in range(r0, r0 + nb):
+            for j in range(r0, i + 1):
+                L[i, j] = L_diag[i, j - r0]
             for j in range(i + 1, n):
                 L[i, j] = 0.0
-        f0 += nb
     return L
 
 
-@njit(cache=True)
-def least_distance_rows(
-    U_f: FloatArray,
-    perm: IntArray,
-    rows: FloatArray,
-    box: IntArray,
-) -> tuple[FloatArray, FloatArray]:
-    """From U_f = L^-T (n, n, upper triangular in factor order): U (n, n) = U_f with its rows
-    moved to the QP's numbering (so that H^-1 = U U' in the QP's variables), and
-    W = [U[box]; C U] with C block-diagonal, ``rows`` (R, 5) per foot-step (five consecutive
-    variables in the QP's numbering), i.e. W[n_b + R f + r] = rows[r] @ U[5 f : 5 f + 5]."""
-    n = U_f.shape[0]
+@njit(cache=True, error_model="numpy")
+def constraint_rows(U: FloatArray, rows: FloatArray, box: IntArray) -> FloatArray:
+    """W = [U[box]; C U] for an upper-triangular, C-contiguous U (n, n) and C block-diagonal:
+    ``rows`` (R, 5) per foot-step of five consecutive variables, i.e.
+    W[n_b + R f + r] = rows[r] @ U[5 f : 5 f + 5] (n_b = len(box)). Each row is written once,
+    from column 5 f on (U is zero below its diagonal); a row of ``rows`` with at most two
+    nonzeros (all of the wrench rows) takes one pass over the two rows of U it combines."""
+    n = U.shape[0]
     R = rows.shape[0]
     n_b = box.shape[0]
     n_fs = n // 5
-    U = np.zeros((n, n))
-    first = np.empty(n, dtype=np.int64)  # first nonzero column of each row of U
-    for i in range(n):
-        q = perm[i]
-        first[q] = i
-        for c in range(i, n):
-            U[q, c] = U_f[i, c]
-    W = np.zeros((n_b + n_fs * R, n))
+    W = np.empty((n_b + n_fs * R, n))
     for i in range(n_b):
         q = box[i]
-        for c in range(first[q], n):
-            W[i, c] = U[q, c]
-    for f in range(n_fs):
-        c0 = first[5 * f]
-        for a in range(1, 5):
-            c0 = min(c0, first[5 * f + a])
-        for r in range(R):
-            out = n_b + R * f + r
-            for a in range(5):
-                w = rows[r, a]
-                if w != 0.0:
-                    src = 5 * f + a
-                    for c in range(c0, n):
-                        W[out, c] += w * U[src, c]
-    return U, W
+        W[i, :q] = 0.0
+        W[i, q:] = U[q, q:]
+    for r in range(R):
+        nnz = 0
+        a1, a2 = 0, 0
+        w1, w2 = 0.0, 0.0
+        for a in range(5):
+            if rows[r, a] != 0.0:
+                nnz += 1
+                if nnz == 1:
+                    a1, w1 = a, rows[r, a]
+                else:
+                    a2, w2 = a, rows[r, a]
+        for f in range(n_fs):
+            c0 = 5 * f
+            Wr = W[n_b + R * f + r]
+            Wr[:c0] = 0.0
+            if nnz == 0:
+                Wr[c0:] = 0.0
+            elif nnz == 1:
+                u1 = U[c0 + a1]
+                for c in range(c0, n):
+                    Wr[c] = w1 * u1[c]
+            elif nnz == 2:
+                u1 = U[c0 + a1]
+                u2 = U[c0 + a2]
+                for c in range(c0, n):
+                    Wr[c] = w1 * u1[c] + w2 * u2[c]
+            else:
+                for c in range(c0, n):
+                    acc = 0.0
+                    for a in range(5):
+                        acc += rows[r, a] * U[c0 + a, c]
+                    Wr[c] = acc
+    return W

@@ -92,7 +92,7 @@ class StepTerms:
     foot-frame wrench, ``cos_foot``/``sin_foot`` (N, 2) of the foot yaws, ``Phi`` (N, 6, 10)
     the omega/pdot kicks of the 10 wrench components of step k (zero columns for swing
     feet), ``cols`` the stance variable indices into the 10N layout, in the QP's order:
-    steps 1..N-1, then step 0.
+    steps from N-1 down to 0.
     """
 
     Iinv: FloatArray
