@@ -281,6 +281,8 @@ class MultiContactMpc:
     def __init__(self, settings: MpcSettings | None = None) -> None:
         self.settings = settings if settings is not None else MpcSettings()
         s = self.settings
+        # Compile (or load) the kernels now rather than in the first update.
+        mpc_kernels.warm_up()
         self._solver = QpSolver(s.backend, s.qp)
         self._q = np.asarray(s.q_diag, dtype=np.float64)
         r = np.asarray(s.r_diag, dtype=np.float64)
