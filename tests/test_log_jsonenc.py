@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from locoplan.log.jsonenc import encode_json, infer_schema, make_json_encoder, to_jsonable
@@ -128,3 +128,44 @@ def test_schema_inference() -> None:
     assert p["obj"]["properties"]["y"] == {"type": "number"}
     with pytest.raises(TypeError):
         infer_schema([1, 2], "x")  # type: ignore[arg-type]
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal JSON values, floats bit for bit (the sign of zero included)."""
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, dict) and isinstance(b, dict):
+        return list(a) == list(b) and all(_same(a[k], b[k]) for k in a)
+    return type(a) is type(b) and a == b
+
+
+arrays = st.builds(
+    lambda shape, scale, seed: np.random.default_rng(seed).normal(size=shape) * scale,
+    st.lists(st.integers(0, 4), min_size=1, max_size=4).map(tuple),
+    st.sampled_from([1e-8, 1e-3, 1.0, 1e3, 1e12]),
+    st.integers(0, 2**32 - 1),
+)
+top_values = (
+    leaves
+    | arrays
+    | st.lists(finite_or_not, max_size=4)
+    | st.just(np.array([1.0, np.nan, -np.inf]))
+    | st.just(np.arange(4, dtype=np.int32))
+    | st.just(np.array([True, False]))
+    | st.just(np.float64(-0.0))
+    | st.just(np.bool_(True))
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.dictionaries(st.text(max_size=5), top_values, max_size=6), st.sampled_from([0, 3, 6]))
+def test_fast_encoder_with_decimals_matches_the_reference(
+    payload: dict[str, Any], decimals: int
+) -> None:
+    """The compiled path for top-level float arrays writes what `to_jsonable` (arrays rounded,
+    non-finite as null) gives, number for number."""
+    fast = _strict_loads(make_json_encoder(decimals)(payload))
+    reference = json.loads(json.dumps(to_jsonable(payload, decimals), allow_nan=False))
+    assert _same(fast, reference)

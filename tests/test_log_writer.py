@@ -24,7 +24,7 @@ from locoplan.log import (
     read_log,
     sphere,
 )
-from locoplan.log.scene import RED
+from locoplan.log.scene import RED, prepare_scene
 
 SCENARIO = "name: demo\ntasks:\n  - pick: {object: package}\n"
 JOINTS = ["L_hip", "L_knee", "R_hip", "R_knee"]
@@ -352,3 +352,25 @@ def test_two_open_writers_do_not_mix(tmp_path: Path) -> None:
     assert {m["who"] for _, m in log_a.messages("/x")} == {"a"}
     assert {m["who"] for _, m in log_b.messages("/x")} == {"b"}
     assert log_b.topics["/joint_states"].message_count == 5
+
+
+def test_prepared_scene_and_partial_joint_states_round_trip(tmp_path: Path) -> None:
+    """A `PreparedScene` reads back as the same items passed as a list (only re-stamped), and
+    joint states without velocity or effort leave those fields unset."""
+    items = [box("b", [0.5, 0.0, 0.6], [0.2, 0.3, 0.4], color=RED), sphere("s", [0, 0, 1], 0.1)]
+    path = tmp_path / "p.mcap"
+    with RunLogWriter(path, scenario_name="p", scenario_text="") as w:
+        prepared = prepare_scene(items)
+        for k in range(3):
+            w.scene("/scene/a", k * 0.1, prepared)
+            w.scene("/scene/b", k * 0.1, items)
+        w.joint_states(0.0, JOINTS, np.arange(4.0))
+    log = read_log(path)
+    for (ta, a), (tb, b) in zip(log.messages("/scene/a"), log.messages("/scene/b"), strict=True):
+        # Parsed from two channels (two message classes): compare canonical encodings.
+        assert ta == tb
+        assert a.SerializeToString(deterministic=True) == b.SerializeToString(deterministic=True)
+        assert [e.timestamp.nanos for e in a.entities] == [round(ta * 1e9)] * 2
+    ((_, js),) = list(log.messages("/joint_states"))
+    assert [j.position for j in js.joints] == [0.0, 1.0, 2.0, 3.0]
+    assert not any(j.HasField("velocity") or j.HasField("effort") for j in js.joints)

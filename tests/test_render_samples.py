@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from locoplan.log.jsonenc import make_json_encoder
 from locoplan.plan import PlannedTask
@@ -132,3 +134,25 @@ def test_camera_low_pass_converges_and_fixes_the_azimuth() -> None:
         p = cam.update([1.0, 0.0, 0.6], np.array([1.0, 0.0, 0.0, 0.0]))
     assert p[0] == pytest.approx(1.0 - math.exp(-1.0), abs=1e-9)
     assert cam.azimuth_deg == pytest.approx(45.0)  # the view direction stays fixed
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(
+        st.tuples(st.integers(0, 20), st.integers(1, 8)).map(lambda p: (p[0] * 0.25, p[1] * 0.25)),
+        max_size=6,
+    ),
+    st.lists(st.floats(-1.0, 8.0), min_size=1, max_size=20),
+)
+def test_label_lookup_equals_a_scan_of_all_tasks(
+    intervals: list[tuple[float, float]], times: list[float]
+) -> None:
+    """The bisection over interval bounds gives the labels a scan of every task gives
+    (touching and overlapping intervals, times on the bounds included)."""
+    labels = tuple(f"task {i}" for i in range(len(intervals)))
+    starts = tuple(s for s, _ in intervals)
+    ends = tuple(s + d for s, d in intervals)
+    timeline = TaskTimeline(starts, ends, labels)
+    for t in [*times, *starts, *ends]:
+        active = [lab for s, e, lab in zip(starts, ends, labels, strict=True) if s <= t < e]
+        assert timeline.label_at(t) == (" + ".join(active) if active else "idle")

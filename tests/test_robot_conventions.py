@@ -86,3 +86,36 @@ def test_acceleration_drift_is_derivative_of_T() -> None:
         vs.append(cv.velocity_transform(cv.pin_base_rotation(qt), 6) @ qvel[:6])
     fd = (vs[1] - vs[0]) / (2 * h)
     assert np.allclose(cv.basis_change_drift(v_pin), fd, atol=1e-8)
+
+
+def _reference_rotation(quat_wxyz: np.ndarray) -> np.ndarray:
+    """The numpy expression the fast path must reproduce bit for bit."""
+    w, x, y, z = np.asarray(quat_wxyz, dtype=np.float64) / np.linalg.norm(quat_wxyz)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def test_state_conversion_is_bit_for_bit_the_reference() -> None:
+    """`mj_to_pin_state` (the closed loop's per-tick call) gives exactly the numbers of the
+    separate conversions and of the plain numpy formulas (no tolerance: the controller must
+    see the same state whichever path computed it), also for unnormalised quaternions."""
+    rng = np.random.default_rng(11)
+    for k in range(2000):
+        qpos = rng.normal(size=NQ) * rng.uniform(0.1, 3.0)
+        qvel = rng.normal(size=NV) * 3.0
+        if k % 2:
+            qpos[3:7] /= np.linalg.norm(qpos[3:7])
+        q, v = cv.mj_to_pin_state(qpos, qvel)
+        assert np.array_equal(q, cv.mj_to_pin_q(qpos))
+        assert np.array_equal(v, cv.mj_to_pin_v(qpos, qvel))
+        R = _reference_rotation(qpos[3:7])
+        assert np.array_equal(cv.quat_wxyz_to_rotation(qpos[3:7]), R)
+        assert np.array_equal(v[0:3], R.T @ qvel[0:3])
+        quat = qpos[3:7] / np.linalg.norm(qpos[3:7])
+        assert np.array_equal(q[3:7], quat[[1, 2, 3, 0]])
+        assert np.array_equal(cv.pin_base_rotation(q), _reference_rotation(quat))

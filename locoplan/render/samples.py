@@ -4,8 +4,9 @@ A `RenderSample` is the state of the whole MuJoCo scene at one instant: the full
 the compiled scene (robot free joint, robot joints, then each object's free joint, in MuJoCo's
 order), the planned stance flags and the label of the active tasks. The closed loop hands the
 same values to the live video recorder and writes them to the log's ``/sim/qpos`` topic
-(JSON, floats in full precision, so they read back bit for bit); `locoplan render` decodes
-them again. Both paths then go through `FrameClock`, so `run --video` and `render` turn the
+(JSON; bit for bit with the writer's default encoding, rounded to the writer's
+`json_decimals` otherwise: 6 places in `locoplan run`, a micrometre or a microradian, which
+no frame shows); `locoplan render` decodes them again. Both paths then go through `FrameClock`, so `run --video` and `render` turn the
 same samples into the same frames.
 
 Times are compared as integer nanoseconds (as the log stores them), never as floats.
@@ -13,9 +14,10 @@ Times are compared as integer nanoseconds (as the log stores them), never as flo
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -89,6 +91,15 @@ class TaskTimeline:
     starts: tuple[float, ...]
     ends: tuple[float, ...]
     labels: tuple[str, ...]
+    # Every start and end, sorted, and the label of each interval between two of them (the
+    # active tasks change only there), so `label_at` is a bisection, not a scan of all tasks.
+    _bounds: tuple[float, ...] = field(init=False, repr=False, compare=False)
+    _segment_labels: tuple[str, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        bounds = tuple(sorted(set(self.starts) | set(self.ends)))
+        object.__setattr__(self, "_bounds", bounds)
+        object.__setattr__(self, "_segment_labels", tuple(map(self._scan, bounds)))
 
     @staticmethod
     def from_plan(plan: Plan) -> TaskTimeline:
@@ -101,6 +112,12 @@ class TaskTimeline:
 
     def label_at(self, t: float) -> str:
         """Labels of the tasks active at `t` joined by `` + ``, or ``idle``."""
+        k = bisect.bisect_right(self._bounds, t) - 1
+        # Before the first bound no task is active; within [bounds[k], bounds[k + 1]) the
+        # active tasks are those active at bounds[k].
+        return IDLE_LABEL if k < 0 else self._segment_labels[k]
+
+    def _scan(self, t: float) -> str:
         active = [
             label
             for start, end, label in zip(self.starts, self.ends, self.labels, strict=True)

@@ -30,7 +30,15 @@ import numpy as np
 import numpy.typing as npt
 
 from locoplan.log import topics
-from locoplan.log.scene import Rgba, SceneItem, box, force_arrow, line_strip, sphere
+from locoplan.log.scene import (
+    Rgba,
+    SceneItem,
+    box,
+    force_arrow,
+    line_strip,
+    prepare_scene,
+    sphere,
+)
 from locoplan.log.writer import RunLogWriter
 from locoplan.plan import Plan
 from locoplan.render.samples import SAMPLE_TOPIC, RenderSample, to_ns
@@ -208,7 +216,8 @@ class ViewLogger:
         desc = scene.robot
         self._period_ns = to_ns(scene_period)
         self._next_scene_ns = 0
-        self._robot = robot_geometry(scene)
+        # Constant in the links' frames: encoded once, only re-stamped on the scene grid.
+        self._robot = prepare_scene(robot_geometry(scene))
         self._joint_names = list(desc.joint_names)
         self._inv_limits = 1.0 / np.asarray(desc.torque_limits, dtype=float)
         self._foot_sites = [

@@ -25,22 +25,48 @@ All functions take single states (1-D arrays); nq = 7 + nj, nv = 6 + nj.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
+_WXYZ_TO_XYZW = np.array([1, 2, 3, 0])
+_XYZW_TO_WXYZ = np.array([3, 0, 1, 2])
+
 
 def quat_wxyz_to_rotation(quat_wxyz: FloatArray) -> FloatArray:
     """Rotation matrix (3, 3) of a quaternion (w, x, y, z); normalised first."""
-    w, x, y, z = np.asarray(quat_wxyz, dtype=np.float64) / np.linalg.norm(quat_wxyz)
+    quat = np.asarray(quat_wxyz, dtype=np.float64)
+    # Scalar arithmetic on Python floats: 2-3x cheaper than on numpy scalars, and the same
+    # IEEE operations, so the matrix is bit for bit what the numpy expressions gave. The norm
+    # stays numpy's (its dot product's summation order is BLAS's).
+    w, x, y, z = (quat / _norm(quat)).tolist()
+    return _rotation(w, x, y, z)
+
+
+def _norm(quat: FloatArray) -> float:
+    """Euclidean norm of a 1-D float64 array: what `np.linalg.norm` computes for one (the
+    square root of `dot`, the same bits), without its dispatch."""
+    return math.sqrt(quat.dot(quat))
+
+
+def _rotation(w: float, x: float, y: float, z: float) -> FloatArray:
+    """Rotation matrix (3, 3) of the unit quaternion (w, x, y, z)."""
     return np.array(
         [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+            1 - 2 * (y * y + z * z),
+            2 * (x * y - w * z),
+            2 * (x * z + w * y),
+            2 * (x * y + w * z),
+            1 - 2 * (x * x + z * z),
+            2 * (y * z - w * x),
+            2 * (x * z - w * y),
+            2 * (y * z + w * x),
+            1 - 2 * (x * x + y * y),
         ]
-    )
+    ).reshape(3, 3)
 
 
 def mj_base_rotation(qpos: FloatArray) -> FloatArray:
@@ -50,16 +76,33 @@ def mj_base_rotation(qpos: FloatArray) -> FloatArray:
 
 def pin_base_rotation(q: FloatArray) -> FloatArray:
     """R_base_to_world (3, 3) from a pinocchio q."""
-    x, y, z, w = q[3:7]
-    return quat_wxyz_to_rotation(np.array([w, x, y, z]))
+    quat = np.asarray(q[3:7], dtype=np.float64)
+    # The norm of (x, y, z, w) in this order is the norm of (w, x, y, z) of earlier versions
+    # only up to round-off, so reorder first (bit-for-bit the same matrix as before).
+    wxyz = quat[_XYZW_TO_WXYZ]
+    w, x, y, z = (wxyz / _norm(wxyz)).tolist()
+    return _rotation(w, x, y, z)
 
 
 def mj_to_pin_q(qpos: FloatArray) -> FloatArray:
     """pinocchio q (nq,) from MuJoCo qpos (nq,): quaternion reordered and normalised."""
     q = np.array(qpos, dtype=np.float64)
     quat = q[3:7] / np.linalg.norm(q[3:7])
-    q[3:6], q[6] = quat[1:4], quat[0]
+    q[3:7] = quat[_WXYZ_TO_XYZW]
     return q
+
+
+def mj_to_pin_state(qpos: FloatArray, qvel: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """(`mj_to_pin_q(qpos)`, `mj_to_pin_v(qpos, qvel)`) with one normalisation and one
+    rotation matrix: the same numbers as the two calls, for less than half their cost."""
+    q = np.array(qpos, dtype=np.float64)
+    quat = q[3:7]
+    quat = quat / _norm(quat)
+    q[3:7] = quat[_WXYZ_TO_XYZW]
+    w, x, y, z = quat.tolist()
+    v = np.array(qvel, dtype=np.float64)
+    v[0:3] = _rotation(w, x, y, z).T @ v[0:3]
+    return q, v
 
 
 def pin_to_mj_q(q: FloatArray) -> FloatArray:

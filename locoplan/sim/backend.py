@@ -13,8 +13,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 import numpy.typing as npt
+from numba import njit
 
-from locoplan.robot.conventions import mj_to_pin_q, mj_to_pin_v
+from locoplan.robot.conventions import mj_to_pin_state
 from locoplan.robot.mujoco_model import nominal_qpos
 from locoplan.sim.scene import Scene
 
@@ -22,6 +23,66 @@ FloatArray = npt.NDArray[np.float64]
 
 NQ_ROBOT = 23
 NV_ROBOT = 22
+
+
+# An explicit signature (any layout: MuJoCo's contact fields are strided views): compiled or
+# loaded from the cache at import, never in the middle of a run.
+@njit(
+    "void(int32[:, :], float64[:, :], int32[:], int32[:], float64[:, :], float64[:],"
+    " int32[:], int32[:], boolean, float64[:, :])",
+    cache=True,
+)
+def _foot_forces(
+    geom: npt.NDArray[np.int32],
+    frame: FloatArray,
+    efc_address: npt.NDArray[np.int32],
+    dim: npt.NDArray[np.int32],
+    friction: FloatArray,
+    efc_force: FloatArray,
+    geom_body: npt.NDArray[np.int32],
+    feet: npt.NDArray[np.int32],
+    pyramidal: bool,
+    out: FloatArray,
+) -> None:
+    """Add to `out[k]` (3,) the world-frame force on foot body `feet[k]` of every contact.
+
+    What `mj_contactForce` computes, for all contacts in one call: the force geom1 exerts on
+    geom2 in the contact frame (normal, tangent 1, tangent 2) is the contact's block of
+    `efc_force` (elliptic cones), or decoded from its pyramid edges (pyramidal: the normal is
+    the sum of the edge forces, tangent i is (edge 2i - edge 2i+1) mu_i). The frame's rows are
+    the normal (geom1 -> geom2) and the tangents, so f_world = frame^T f; a foot that is
+    geom1 receives -f_world. Contacts excluded from the constraints (efc_address < 0) carry
+    no force.
+    """
+    for i in range(geom.shape[0]):
+        adr = efc_address[i]
+        if adr < 0:
+            continue
+        b1 = geom_body[geom[i, 0]]
+        b2 = geom_body[geom[i, 1]]
+        for k in range(feet.size):
+            fb = feet[k]
+            if fb != b1 and fb != b2:
+                continue
+            n = dim[i]
+            f0 = 0.0
+            f1 = 0.0
+            f2 = 0.0
+            if n == 1:
+                f0 = efc_force[adr]
+            elif pyramidal:
+                for j in range(2 * (n - 1)):
+                    f0 += efc_force[adr + j]
+                f1 = (efc_force[adr] - efc_force[adr + 1]) * friction[i, 0]
+                f2 = (efc_force[adr + 2] - efc_force[adr + 3]) * friction[i, 1]
+            else:
+                f0 = efc_force[adr]
+                f1 = efc_force[adr + 1]
+                f2 = efc_force[adr + 2]
+            sign = 1.0 if fb == b2 else -1.0
+            for col in range(3):
+                w = frame[i, col] * f0 + frame[i, 3 + col] * f1 + frame[i, 6 + col] * f2
+                out[k, col] += sign * w
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,7 +109,8 @@ class MujocoBackend:
         ]
         self._trunk_body_id = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "trunk")
         self._geom_body = np.asarray(m.geom_bodyid)
-        self._wrench = np.zeros(6)
+        self._foot_bodies = np.array(self._foot_body_ids, dtype=np.int32)
+        self._pyramidal = int(m.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
         self.ctrl_low = np.asarray(m.actuator_ctrlrange[:, 0]).copy()
         self.ctrl_high = np.asarray(m.actuator_ctrlrange[:, 1]).copy()
 
@@ -68,15 +130,19 @@ class MujocoBackend:
         self.data.ctrl[:] = tau
         mujoco.mj_step(self.model, self.data)
 
+    def step_held(self) -> None:
+        """One physics step with the torques of the last `step` (MuJoCo keeps `ctrl`)."""
+        mujoco.mj_step(self.model, self.data)
+
     # -- state -------------------------------------------------------------------------------
     @property
     def time(self) -> float:
         return float(self.data.time)
 
     def robot_state(self) -> RobotState:
-        qpos = self.data.qpos[:NQ_ROBOT]
-        qvel = self.data.qvel[:NV_ROBOT]
-        return RobotState(t=self.time, q=mj_to_pin_q(qpos), v=mj_to_pin_v(qpos, qvel))
+        d = self.data
+        q, v = mj_to_pin_state(d.qpos[:NQ_ROBOT], d.qvel[:NV_ROBOT])
+        return RobotState(t=float(d.time), q=q, v=v)
 
     def applied_torques(self) -> FloatArray:
         """Torques the actuators actually applied at the last step (after ctrlrange), N m."""
@@ -89,24 +155,28 @@ class MujocoBackend:
         return np.asarray(self.data.qpos[3:7]).copy()
 
     def state_is_finite(self) -> bool:
+        """True when qpos and qvel hold no NaN or inf."""
         return bool(np.all(np.isfinite(self.data.qpos)) and np.all(np.isfinite(self.data.qvel)))
 
     def foot_contact_forces(self) -> FloatArray:
         """Ground reaction force on each foot (2, 3), world frame, N (sum over contacts)."""
         out = np.zeros((2, 3))
-        d, m = self.data, self.model
-        for i in range(d.ncon):
-            c = d.contact[i]
-            b1 = self._geom_body[c.geom1]
-            b2 = self._geom_body[c.geom2]
-            for k, fb in enumerate(self._foot_body_ids):
-                if fb not in (b1, b2):
-                    continue
-                mujoco.mj_contactForce(m, d, i, self._wrench)
-                # The contact frame's first row is the normal, pointing from geom1 to geom2;
-                # mj_contactForce gives the force that geom1 exerts on geom2 in that frame.
-                f_world = c.frame.reshape(3, 3).T @ self._wrench[:3]
-                out[k] += f_world if fb == b2 else -f_world
+        d = self.data
+        if d.ncon == 0:
+            return out
+        c = d.contact
+        _foot_forces(
+            c.geom,
+            c.frame,
+            c.efc_address,
+            c.dim,
+            c.friction,
+            d.efc_force,
+            self._geom_body,
+            self._foot_bodies,
+            self._pyramidal,
+            out,
+        )
         return out
 
     def object_pose(self, body_id: int) -> tuple[FloatArray, FloatArray]:

@@ -146,11 +146,9 @@ class ConveyorDrive:
     def apply(self, data: mujoco.MjData, held: set[str]) -> None:
         if not self.belts:
             return
-        touching: set[tuple[int, int]] = set()
-        for i in range(data.ncon):
-            c = data.contact[i]
-            touching.add((int(c.geom1), int(c.geom2)))
-            touching.add((int(c.geom2), int(c.geom1)))
+        # Geom pairs in contact, both orders (one array read instead of a struct per contact).
+        pairs = data.contact.geom.tolist() if data.ncon else []
+        touching = {(g1, g2) for g1, g2 in pairs} | {(g2, g1) for g1, g2 in pairs}
         for name, bid, gid, dof, mass in self._objects:
             force = np.zeros(3)
             if name not in held:

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 import numpy.typing as npt
+from numba import njit
 
 from locoplan.control.controller import (
     ControllerSettings,
@@ -23,7 +24,7 @@ from locoplan.control.controller import (
     LocoManipulationController,
 )
 from locoplan.exceptions import SimulationError, SolverFailure
-from locoplan.log.writer import RunLogWriter, Transform
+from locoplan.log.writer import RunLogWriter
 from locoplan.plan import Plan
 from locoplan.render.samples import RenderSample, TaskTimeline
 from locoplan.render.view_log import ViewLogger, sample_from_data
@@ -37,6 +38,8 @@ FloatArray = npt.NDArray[np.float64]
 
 RECORD_PERIOD = 0.01  # s between recorded samples (metrics) and transform messages
 TILT_LIMIT = math.radians(60.0)
+_COS_TILT_LIMIT = math.cos(TILT_LIMIT)
+_WXYZ_TO_XYZW = np.array([1, 2, 3, 0])
 
 
 @dataclass(frozen=True, slots=True)
@@ -87,6 +90,50 @@ class RunRecord:
     error: str | None = None
 
 
+# Explicit signature (any layout): compiled or loaded from the cache at import.
+@njit(
+    "Tuple((float64, boolean))(float64[:], float64[:], float64[:], float64[:], float64[:],"
+    " float64, float64[:], float64[:])",
+    cache=True,
+    error_model="numpy",  # x / 0 gives inf or NaN as in numpy, no exception
+)
+def _tick_checks(
+    tau: FloatArray,
+    limits: FloatArray,
+    applied: FloatArray,
+    peak_abs: FloatArray,
+    peak_time: FloatArray,
+    t: float,
+    qpos: FloatArray,
+    qvel: FloatArray,
+) -> tuple[float, bool]:
+    """A control tick's bookkeeping in one call: max |tau| / limit of the commanded torques
+    (-1 when one is NaN: NaN never raises a peak), the applied torques' peaks `peak_abs` and
+    their times `peak_time` (updated in place, at `t`), and whether qpos and qvel are finite.
+    The same operations as numpy's abs, divide, max and isfinite, so the same numbers."""
+    ratio = 0.0
+    has_nan = False
+    for i in range(tau.size):
+        r = abs(tau[i]) / limits[i]
+        if r != r:
+            has_nan = True
+        elif r > ratio:
+            ratio = r
+    for i in range(applied.size):
+        a = abs(applied[i])
+        if a > peak_abs[i]:
+            peak_abs[i] = a
+            peak_time[i] = t
+    finite = True
+    for x in qpos:
+        if not np.isfinite(x):
+            finite = False
+    for x in qvel:
+        if not np.isfinite(x):
+            finite = False
+    return (-1.0 if has_nan else ratio), finite
+
+
 def _rpy_wxyz(qw: float, qx: float, qy: float, qz: float) -> tuple[float, float, float]:
     roll = math.atan2(2 * (qw * qx + qy * qz), 1 - 2 * (qx * qx + qy * qy))
     pitch = math.asin(max(-1.0, min(1.0, 2 * (qw * qy - qz * qx))))
@@ -129,11 +176,16 @@ class ClosedLoop:
         for name in scene.object_body_ids:
             self.record.object_positions[name] = []
         m = scene.model
-        self._robot_bodies = [
+        robot_bodies = [
             (i, mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, i) or f"body{i}")
             for i in range(1, m.nbody)
             if not (mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, i) or "").startswith("object_")
         ]
+        # Per-run constants of the recorded samples (the /tf frames, the joint names).
+        self._robot_body_ids = np.array([i for i, _ in robot_bodies], dtype=np.intp)
+        self._robot_body_names = [name for _, name in robot_bodies]
+        self._joint_names = list(desc.joint_names)
+        self._object_bodies = list(scene.object_body_ids.items())
         self._next_record = 0.0
         self._events = plan.events
         self._next_event = 0
@@ -186,42 +238,64 @@ class ClosedLoop:
             self.log.event(ev.t, ev.kind, task_index=ev.task_index, detail=ev.detail)
             self._next_event += 1
 
-    def _record(self, t: float, out_tau: FloatArray, mpc_u: FloatArray | None) -> None:
+    def _record(self, t_tick: float, t: float, out: ControlOutput, applied: FloatArray) -> None:
+        """One recorded sample at `t` (s, after the physics step of the tick that started at
+        `t_tick`): the record's trunk and object poses, and with a log the link poses, joint
+        states, trunk, contact forces, WBC output, contact schedule and the view topics."""
         rec = self.record
         d = self.backend.data
-        pos = self.backend.base_position()
-        rpy = _rpy_wxyz(*self.backend.base_quat_wxyz())
+        qpos = d.qpos
+        pos = np.array(qpos[0:3])
+        rpy = _rpy_wxyz(*qpos[3:7].tolist())
         rec.t.append(t)
         rec.base_position.append(pos)
         rec.base_rpy.append(rpy)
-        for name, bid in self.scene.object_body_ids.items():
-            rec.object_positions[name].append(np.asarray(d.xpos[bid]).copy())
-        if self.log is None:
+        xpos = d.xpos
+        for name, bid in self._object_bodies:
+            rec.object_positions[name].append(np.array(xpos[bid]))
+        log = self.log
+        if log is None:
+            if self.on_sample is not None:
+                self.on_sample(self._sample(t, out.stance))
             return
         self._log_plan_events(t)
-        transforms = [
-            Transform(
-                "world", name, np.asarray(d.xpos[i]).copy(), np.asarray(d.xquat[i])[[1, 2, 3, 0]]
-            )
-            for i, name in self._robot_bodies
-        ]
-        self.log.frame_transforms(t, transforms)
-        self.log.joint_states(
-            t,
-            list(self.desc.joint_names),
-            np.asarray(d.qpos[7:23]).copy(),
-            np.asarray(d.qvel[6:22]).copy(),
-            out_tau,
+        ids = self._robot_body_ids
+        log.frame_transforms_arrays(
+            t, "world", self._robot_body_names, xpos[ids], d.xquat[ids][:, _WXYZ_TO_XYZW]
         )
-        self.log.json(
+        log.joint_states(t, self._joint_names, qpos[7:23], d.qvel[6:22], applied)
+        log.json(
             "/robot/base",
             t,
             {"position": pos, "rpy_deg": np.degrees(np.asarray(rpy))},
         )
-        self.log.json(
-            "/contact/measured",
-            t,
-            {"force_world": self.backend.foot_contact_forces()},
+        forces = self.backend.foot_contact_forces()
+        log.json("/contact/measured", t, {"force_world": forces})
+        self._view_sample(t, out, applied, forces)
+        if out.wbc is not None:
+            w = out.wbc
+            log.json(
+                "/wbc",
+                t_tick,
+                {
+                    "ok": w.ok,
+                    "status": w.status,
+                    "iterations": w.iterations,
+                    "tau": out.tau,
+                    "tau_clipped": out.tau_clipped,
+                    "n_clipped": out.n_clipped,
+                    "delta_base_acc": w.delta_base,
+                    # (stance contacts, 5): an array, so the writer rounds it as the rest
+                    "contact_w5": np.asarray(w.w5, dtype=float).reshape(-1, 5),
+                    "tick_ms": out.wbc_time_s * 1e3,
+                    "build_ms": w.build_time_s * 1e3,
+                    "solve_ms": w.solve_time_s * 1e3,
+                },
+            )
+        log.json(
+            "/contact/schedule",
+            t_tick,
+            {"stance": list(out.stance), "wrench_world": out.wrench_world},
         )
 
     def run(
@@ -232,115 +306,119 @@ class ClosedLoop:
         """Simulate until `t_end` (s) or a fall. Raises SolverFailure / SimulationError."""
         rec = self.record
         be = self.backend
+        d = be.data
+        log = self.log
+        controller = self.controller
+        grasp = self.grasp
+        perf_counter = time.perf_counter
         dt = be.dt
         n_steps = round(t_end / dt)
-        wall0 = time.perf_counter()
-        split = {"physics": 0.0, "dynamics": 0.0, "mpc": 0.0, "wbc": 0.0, "logging": 0.0}
+        decimation = self.control_decimation
+        limits = rec.torque_limits
+        wall0 = perf_counter()
+        # Wall time per part, accumulated in locals (cheaper than a dict in the hot loop).
+        t_physics = t_dynamics = t_mpc = t_wbc = t_logging = 0.0
+        n_ticks = 0
+        next_record = self._next_record
         last_progress = 0.0
         self._view_start()
         try:
             out = None
-            applied = np.zeros(len(rec.torque_limits))
+            n_clipped = 0  # clipped joints of the held torques, counted per physics step
+            applied = np.zeros(len(limits))
             for i in range(n_steps):
-                t = be.time
+                t = d.time
                 # Everything but the physics step runs at the control rate: the torques are
                 # held between control ticks (so is what the actuators apply), and grasps,
                 # belts, pushes and the fall check need no finer timing than 2 ms.
-                tick = out is None or i % self.control_decimation == 0
+                tick = out is None or i % decimation == 0
                 if tick:
                     state = be.robot_state()
-                    out = self.controller.step(t, state.q, state.v)
-                    split["dynamics"] += out.dynamics_time_s
-                    split["mpc"] += out.mpc_time_s
-                    split["wbc"] += out.wbc_time_s
+                    out = controller.step(t, state.q, state.v)
+                    t_dynamics += out.dynamics_time_s
+                    t_mpc += out.mpc_time_s
+                    t_wbc += out.wbc_time_s
                     if out.mpc is not None:
                         rec.mpc_times_s.append(out.mpc_time_s)
-                        if self.log is not None:
+                        if log is not None:
+                            t_l = perf_counter()
                             self._log_mpc(t, out)
+                            t_logging += perf_counter() - t_l
                         if out.mpc.fallback != "none":
                             rec.n_mpc_fallbacks += 1
                     if out.wbc is not None:
                         rec.wbc_times_s.append(out.wbc_time_s)
                         if not out.wbc.ok:
                             rec.n_wbc_failures += 1
-                    rec.peak_commanded_ratio = max(
-                        rec.peak_commanded_ratio,
-                        float(np.max(np.abs(out.tau) / rec.torque_limits)),
-                    )
-                    for kind, fields in self.grasp.update(t, be.data):
-                        rec.grasp_events.append((t, kind, str(fields["object"])))
-                        if kind == "grasp_failed":
-                            rec.grasp_failures[str(fields["object"])] = float(fields["gap_m"])  # type: ignore[arg-type]
-                        if self.log is not None:
-                            self.log.event(t, kind, **fields)
-                    self.conveyor.apply(be.data, self.grasp.held_objects())
+                    if grasp.holds:
+                        for kind, fields in grasp.update(t, d):
+                            rec.grasp_events.append((t, kind, str(fields["object"])))
+                            if kind == "grasp_failed":
+                                rec.grasp_failures[str(fields["object"])] = float(fields["gap_m"])  # type: ignore[arg-type]
+                            if log is not None:
+                                log.event(t, kind, **fields)
+                    if self.conveyor.belts:
+                        self.conveyor.apply(d, grasp.held_objects())
                     if self.pushes:
                         self._apply_pushes(t)
+                    n_clipped = out.n_clipped
+                    t_p = perf_counter()
+                    be.step(out.tau_clipped)
+                    t_physics += perf_counter() - t_p
+                else:
+                    t_p = perf_counter()
+                    be.step_held()
+                    t_physics += perf_counter() - t_p
+                rec.n_clipped += n_clipped
+                n_ticks += 1
                 assert out is not None
-                rec.n_clipped += out.n_clipped
-                t_p = time.perf_counter()
-                be.step(out.tau_clipped)
-                split["physics"] += time.perf_counter() - t_p
-                rec.n_ticks += 1
                 if tick:
                     applied = be.applied_torques()
-                    a = np.abs(applied)
-                    bigger = a > rec.peak_abs_torque
-                    if bigger.any():
-                        rec.peak_abs_torque[bigger] = a[bigger]
-                        rec.peak_torque_time[bigger] = t
-                    if not be.state_is_finite():
+                    ratio, finite = _tick_checks(
+                        out.tau,
+                        limits,
+                        applied,
+                        rec.peak_abs_torque,
+                        rec.peak_torque_time,
+                        t,
+                        d.qpos,
+                        d.qvel,
+                    )
+                    rec.peak_commanded_ratio = max(rec.peak_commanded_ratio, ratio)
+                    if not finite:
                         raise SimulationError(t, "non-finite state (NaN or inf)")
-                t_l = time.perf_counter()
-                if t + 1e-9 >= self._next_record:
-                    self._next_record += RECORD_PERIOD
+                if t + 1e-9 >= next_record:
+                    t_l = perf_counter()
+                    next_record += RECORD_PERIOD
                     rec.joint_torque.append(applied)
                     rec.stance.append(out.stance)
-                    self._record(be.time, applied, None)
-                    self._view_sample(be.time, out, applied)
-                    if self.log is not None and out.wbc is not None:
-                        w = out.wbc
-                        self.log.json(
-                            "/wbc",
-                            t,
-                            {
-                                "ok": w.ok,
-                                "status": w.status,
-                                "iterations": w.iterations,
-                                "tau": out.tau,
-                                "tau_clipped": out.tau_clipped,
-                                "n_clipped": out.n_clipped,
-                                "delta_base_acc": w.delta_base,
-                                "contact_w5": [list(x) for x in w.w5],
-                                "tick_ms": out.wbc_time_s * 1e3,
-                                "build_ms": w.build_time_s * 1e3,
-                                "solve_ms": w.solve_time_s * 1e3,
-                            },
-                        )
-                    if self.log is not None:
-                        self.log.json(
-                            "/contact/schedule",
-                            t,
-                            {"stance": list(out.stance), "wrench_world": out.wrench_world},
-                        )
-                split["logging"] += time.perf_counter() - t_l
+                    self._record(t, d.time, out, applied)
+                    t_logging += perf_counter() - t_l
                 if tick and not rec.fell and self._fallen():
                     rec.fell = True
-                    rec.fall_time = be.time
-                    if self.log is not None:
-                        self.log.event(be.time, "fall", height=float(be.base_position()[2]))
+                    rec.fall_time = d.time
+                    if log is not None:
+                        log.event(d.time, "fall", height=float(d.qpos[2]))
                     break
-                if progress is not None and be.time - last_progress >= 0.05:
-                    last_progress = be.time
-                    progress(be.time)
+                if progress is not None and d.time - last_progress >= 0.05:
+                    last_progress = d.time
+                    progress(d.time)
         except (SolverFailure, SimulationError) as exc:
             rec.error = str(exc)
             raise
         finally:
+            self._next_record = next_record
+            rec.n_ticks += n_ticks
             rec.held_at_end = self.grasp.held_objects()
             rec.sim_time = be.time
-            rec.wall_time = time.perf_counter() - wall0
-            rec.tick_split_s = split
+            rec.wall_time = perf_counter() - wall0
+            rec.tick_split_s = {
+                "physics": t_physics,
+                "dynamics": t_dynamics,
+                "mpc": t_mpc,
+                "wbc": t_wbc,
+                "logging": t_logging,
+            }
         return rec
 
     # -- what the video and the Foxglove 3D scene need (locoplan.render) --------------------
@@ -361,18 +439,23 @@ class ClosedLoop:
         if self._view is not None:
             self._view.start(sample, d)
 
-    def _view_sample(self, t: float, out: ControlOutput, tau: FloatArray) -> None:
-        d = self.backend.data
-        sample = sample_from_data(t, d, out.stance, self._timeline.label_at(t))
+    def _sample(self, t: float, stance: tuple[bool, bool]) -> RenderSample:
+        return sample_from_data(t, self.backend.data, stance, self._timeline.label_at(t))
+
+    def _view_sample(
+        self, t: float, out: ControlOutput, tau: FloatArray, forces: FloatArray
+    ) -> None:
+        """The sample at `t` to `on_sample` and the view topics; `forces` (2, 3) N measured."""
+        sample = self._sample(t, out.stance)
         if self.on_sample is not None:
             self.on_sample(sample)
         if self._view is not None:
             com = None if out.mpc is None else np.asarray(out.mpc.X)[:, 3:6]
-            self._view.sample(sample, d, self.backend.foot_contact_forces(), com, tau)
+            self._view.sample(sample, self.backend.data, forces, com, tau)
 
     def _fallen(self) -> bool:
-        pos = self.backend.base_position()
-        _, qx, qy, _ = self.backend.base_quat_wxyz()
+        qpos = self.backend.data.qpos
+        z, _, qx, qy = qpos[2:6].tolist()
         # Tilt of the trunk's z axis from vertical: cos(tilt) = 1 - 2 (qx^2 + qy^2).
         cos_tilt = 1.0 - 2.0 * (qx * qx + qy * qy)
-        return bool(pos[2] < self.desc.fall_height or cos_tilt < math.cos(TILT_LIMIT))
+        return bool(z < self.desc.fall_height or cos_tilt < _COS_TILT_LIMIT)
