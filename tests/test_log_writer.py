@@ -374,3 +374,26 @@ def test_prepared_scene_and_partial_joint_states_round_trip(tmp_path: Path) -> N
     ((_, js),) = list(log.messages("/joint_states"))
     assert [j.position for j in js.joints] == [0.0, 1.0, 2.0, 3.0]
     assert not any(j.HasField("velocity") or j.HasField("effort") for j in js.joints)
+
+
+def test_messages_hold_the_values_of_the_call(tmp_path: Path) -> None:
+    """Messages are encoded in batches, later than the call: arrays, lists and live buffers
+    the caller changes afterwards (as MuJoCo changes qpos every step) must not leak in."""
+    path = tmp_path / "m.mcap"
+    buf = np.zeros(4)
+    flags = [True, False]
+    with RunLogWriter(path, scenario_name="m", scenario_text="", json_decimals=6) as w:
+        for k in range(3):
+            buf[:] = k
+            flags[0] = k % 2 == 0
+            w.json("/x", k * 0.1, {"v": buf, "flags": flags, "view": buf[1:3]})
+            w.frame_transforms_arrays(k * 0.1, "world", ["a"], buf[None, 1:4], buf[None, :])
+            w.joint_states(k * 0.1, JOINTS, buf, buf, buf)
+        buf[:] = 99.0
+    log = read_log(path)
+    for k, (_, m) in enumerate(log.messages("/x")):
+        assert m == {"v": [float(k)] * 4, "flags": [k % 2 == 0, False], "view": [float(k)] * 2}
+    for k, (_, tf) in enumerate(log.messages("/tf")):
+        assert tf.transforms[0].translation.z == float(k)
+    for k, (_, js) in enumerate(log.messages("/joint_states")):
+        assert [j.effort for j in js.joints] == [float(k)] * 4
