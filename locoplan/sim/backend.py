@@ -140,9 +140,13 @@ class MujocoBackend:
         return float(self.data.time)
 
     def robot_state(self) -> RobotState:
+        q, v = self.robot_qv()
+        return RobotState(t=float(self.data.time), q=q, v=v)
+
+    def robot_qv(self) -> tuple[FloatArray, FloatArray]:
+        """`robot_state`'s q (23,) and v (22,) alone (the closed loop's per-tick call)."""
         d = self.data
-        q, v = mj_to_pin_state(d.qpos[:NQ_ROBOT], d.qvel[:NV_ROBOT])
-        return RobotState(t=float(d.time), q=q, v=v)
+        return mj_to_pin_state(d.qpos[:NQ_ROBOT], d.qvel[:NV_ROBOT])
 
     def applied_torques(self) -> FloatArray:
         """Torques the actuators actually applied at the last step (after ctrlrange), N m."""

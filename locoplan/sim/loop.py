@@ -333,8 +333,8 @@ class ClosedLoop:
                 # belts, pushes and the fall check need no finer timing than 2 ms.
                 tick = out is None or i % decimation == 0
                 if tick:
-                    state = be.robot_state()
-                    out = controller.step(t, state.q, state.v)
+                    q, v = be.robot_qv()
+                    out = controller.step(t, q, v)
                     t_dynamics += out.dynamics_time_s
                     t_mpc += out.mpc_time_s
                     t_wbc += out.wbc_time_s
