@@ -1,19 +1,43 @@
-"""Benchmark of one MPC update (build + solve) at horizon 20, per backend and formulation.
+"""Benchmark of one MPC update (build + solve) at horizon 20, per backend and formulation,
+and of the default path on inputs recorded from the real closed loop, before vs now.
 
 Run: OMP_NUM_THREADS=1 .venv/bin/python benchmarks/mpc_qp.py [--updates 300] [--quick]
+     OMP_NUM_THREADS=1 .venv/bin/python benchmarks/mpc_qp.py --scenario scenarios/walk-square.yaml
+         [--scenario ...] [--before REV] [--rerecord]
 
-Inputs are realistic: they are recorded from a closed loop in which the SRBD itself is the
-plant (17 kg, trunk inertia diag(0.17, 0.15, 0.06) or the composite one with pitch 0.59, feet
-at +-0.1 m lateral, CoM 0.55 m high), the MPC re-solved every 10 ms and its first-step wrench
-applied, with a small random disturbance force. Three scenarios: standing (both feet),
-stepping in place (0.4 s gait, 0.05 s double support, 0.15 s swing per foot) and standing
-with 5 kg held 0.3 m ahead (CoP bounds often active). Every combination then replays the
-same recorded inputs in order, on a fresh controller, so solver re-use and caches behave as
-in the loop. Columns: build (outside the solver: for daqp the block factorisation and x_u
-included; U and W of the least-distance form, built only when x_u violates a bound, count as
-solve) and solve time, their total (wall and thread CPU time; the CPU time is the steadier
-figure on a shared machine), iterations median/max, the share of updates whose
-unconstrained minimiser met every bound (daqp not run) and the fallbacks taken.
+Synthetic inputs (default mode) are recorded from a closed loop in which the SRBD itself is
+the plant (17 kg, trunk inertia diag(0.17, 0.15, 0.06) or the composite one with pitch 0.59,
+feet at +-0.1 m lateral, CoM 0.55 m high), the MPC re-solved every 10 ms and its first-step
+wrench applied, with a small random disturbance force. Three scenarios: standing (both
+feet), stepping in place (0.4 s gait, 0.05 s double support, 0.15 s swing per foot) and
+standing with 5 kg held 0.3 m ahead (CoP bounds often active). Every combination then
+replays the same recorded inputs in order, on a fresh controller, so solver re-use and
+caches behave as in the loop. Columns: build (outside the solver: for daqp the structured
+factorisation and x_u included; U and W of the least-distance form, built only when x_u
+violates a bound, count as solve) and solve time, their total (wall and thread CPU time; the
+CPU time is the steadier figure on a shared machine), iterations median/max, the share of
+updates whose unconstrained minimiser met every bound (daqp not run) and the fallbacks.
+
+--scenario: the task script runs closed loop in MuJoCo with the real controller; every
+MpcInput of that run is recorded once into runs/ (again with --rerecord, e.g. after
+controller changes) and replayed in order through a fresh MultiContactMpc with the
+controller's MPC settings, now and with the locoplan package of git revision --before (in a
+subprocess), printing median / p99 of one update for both and the largest relative
+difference between their solutions U (--model overrides the script's model). Measured on
+this 2-core machine (shared with other jobs; best of 5 replays), before = 69f8286 (numpy
+build, LAPACK block factor) and now (numba kernels), median / p99 in us:
+
+    scenario                      updates  constrained  before        now         max |dU|/|U|
+    walk-square                      1732      12 %     741 / 1349    136 /  623     4e-12
+    package-transfer                  461      59 %    1141 / 2072    391 / 1344     6e-12
+    package-transfer (combined)       461      63 %    1152 / 1968    392 / 1030     3e-12
+    stand                            1000       0 %     572 /  754    163 /  234     4e-12
+    standing-load (14 kg held)        800      82 %    1769 / 2766   1093 / 1287     5e-11
+
+A constrained update pays for U = L^-T (LAPACK trtri, 90 us at 125 variables, 240 us at 200)
+and DAQP's own set-up of W (60-140 us) on top of the unconstrained one. Inside the closed
+loop an update takes longer than replayed back to back: walk-square 225 / 841 us (before
+885 / 1553), measured around MultiContactMpc.update in a run.
 """
 
 from __future__ import annotations
@@ -216,9 +240,10 @@ def _fmt(a: np.ndarray) -> str:
 # --- recorded closed-loop inputs, before vs now ------------------------------------------
 
 
-def record_scenario(path: Path) -> dict[str, Any]:
-    """Run the scenario closed loop in MuJoCo (the real controller, no log) and return the
-    MPC's settings and every MpcInput it met, as plain dicts (readable by older code)."""
+def record_scenario(path: Path, model: str | None = None) -> dict[str, Any]:
+    """Run the scenario closed loop in MuJoCo (the real controller, no log; ``model``
+    overrides the script's) and return the MPC's settings and every MpcInput it met, as
+    plain dicts (readable by older code)."""
     from locoplan.scenario import load_scenario_file
     from locoplan.sim.run import RunOptions, run_scenario
 
@@ -236,21 +261,23 @@ def record_scenario(path: Path) -> dict[str, Any]:
     MultiContactMpc.update = recording  # type: ignore[method-assign]
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            run_scenario(loaded.scenario, loaded.text, RunOptions(out_dir=Path(tmp), log=False))
+            options = RunOptions(out_dir=Path(tmp), log=False, model=model)
+            run_scenario(loaded.scenario, loaded.text, options)
     finally:
         MultiContactMpc.update = update  # type: ignore[method-assign]
     return {"settings": settings[0], "inputs": inputs}
 
 
-def recorded(path: Path, again: bool) -> Path:
-    """The recorded inputs of a scenario, cached in runs/ per scenario text (re-recorded
-    with ``again``, e.g. after controller changes)."""
+def recorded(path: Path, again: bool, model: str | None = None) -> Path:
+    """The recorded inputs of a scenario, cached in runs/ per scenario text and model
+    (re-recorded with ``again``, e.g. after controller changes)."""
     digest = hashlib.sha1(path.read_bytes()).hexdigest()[:10]
-    cache = ROOT / "runs" / f"mpc-inputs-{path.stem}-{digest}.pkl"
+    tag = f"-{model}" if model else ""
+    cache = ROOT / "runs" / f"mpc-inputs-{path.stem}{tag}-{digest}.pkl"
     if again or not cache.exists():
         cache.parent.mkdir(parents=True, exist_ok=True)
         with cache.open("wb") as f:
-            pickle.dump(record_scenario(path), f)
+            pickle.dump(record_scenario(path, model), f)
     return cache
 
 
@@ -314,7 +341,9 @@ def _replay_main(cache: str, out: str, repeat: str) -> None:
     np.savez(out, wall=r["wall"], cpu=r["cpu"], iters=r["iters"], U=r["U"])
 
 
-def compare_recorded(scenarios: list[str], before: str, repeat: int, again: bool) -> None:
+def compare_recorded(
+    scenarios: list[str], before: str, repeat: int, again: bool, model: str | None
+) -> None:
     rev = subprocess.run(
         ["git", "-C", str(ROOT), "rev-parse", "--short", before],
         check=True,
@@ -326,12 +355,12 @@ def compare_recorded(scenarios: list[str], before: str, repeat: int, again: bool
         f"one update = build + solve; times in us, median / p99 (best of {repeat} replays)"
     )
     print(
-        f"{'scenario':20s} {'updates':>7s} {'constr.':>7s} {'before ' + rev:>17s}"
+        f"{'scenario':30s} {'updates':>7s} {'constr.':>7s} {'before ' + rev:>17s}"
         f" {'now':>15s} {'now, CPU':>15s}  max |dU|/|U|"
     )
     for name in scenarios:
         path = Path(name)
-        cache = recorded(path, again)
+        cache = recorded(path, again, model)
         now = replay(cache, repeat)
         old = replay_at(before, cache, repeat)
         U_now, U_old = np.asarray(now["U"]), np.asarray(old["U"])
@@ -340,7 +369,8 @@ def compare_recorded(scenarios: list[str], before: str, repeat: int, again: bool
         scale = np.maximum(np.linalg.norm(U_old.reshape(k, -1), axis=1), 1e-300)
         constrained = 100.0 * float(np.mean(np.asarray(now["iters"]) > 0))
         print(
-            f"{path.stem:20s} {k:7d} {constrained:6.0f}% {_fmt(np.asarray(old['wall'])):>17s}"
+            f"{path.stem + (f' ({model})' if model else ''):30s} {k:7d} {constrained:6.0f}%"
+            f" {_fmt(np.asarray(old['wall'])):>17s}"
             f" {_fmt(np.asarray(now['wall']))} {_fmt(np.asarray(now['cpu']))}"
             f"  {float(np.max(diff / scale)):9.1e}"
         )
@@ -365,6 +395,7 @@ def main() -> None:
     )
     ap.add_argument("--before", default="69f8286", help="git revision to compare against")
     ap.add_argument("--rerecord", action="store_true", help="record the scenarios again")
+    ap.add_argument("--model", help="with --scenario: external-force | combined (the script's)")
     if len(sys.argv) == 5 and sys.argv[1] == "--replay":  # the subprocess of replay_at
         _replay_main(*sys.argv[2:])
         return
@@ -372,7 +403,7 @@ def main() -> None:
     if os.environ.get("OMP_NUM_THREADS") != "1":
         print("warning: set OMP_NUM_THREADS=1 for single-core figures")
     if args.scenario:
-        compare_recorded(args.scenario, args.before, args.repeat, args.rerecord)
+        compare_recorded(args.scenario, args.before, args.repeat, args.rerecord, args.model)
         return
     inertia = INERTIA_COMPOSITE if args.composite else INERTIA_TRUNK
     scenarios = {
