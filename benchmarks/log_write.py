@@ -88,7 +88,7 @@ def _scene_items() -> list[Any]:
 
 
 def time_calls(
-    fn: Callable[[int], None], calls: int, flush: Callable[[], None]
+    fn: Callable[[int], object], calls: int, flush: Callable[[], None]
 ) -> tuple[float, float]:
     """Per-call cost (us) of `fn(i)` over `calls` calls, after 50 warm-up calls: the median of
     the call alone and the mean including the encoding, which the writer does in batches
@@ -119,7 +119,7 @@ def per_call(calls: int, directory: Path) -> None:
         robot = prepare_scene(
             [box(f"link{k}/geom", RNG.normal(size=3), [0.05, 0.05, 0.2]) for k in range(70)]
         )
-        cases: list[tuple[str, Callable[[int], None]]] = [
+        cases: list[tuple[str, Callable[[int], object]]] = [
             (
                 f"Transform() x{N_LINKS} from numpy (build only)",
                 lambda i: (
