@@ -121,3 +121,26 @@ def test_inverted_bounds_are_infeasible() -> None:
     l[3], u[3] = 1.0, 0.5
     for got in (LeanDenseQp().solve(H, g, C, l, u), LeanDenseQp().solve(H, g, C, u, l)):
         assert not got.ok and got.status == "primal_infeasible"
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_solve_x_takes_a_feasible_unconstrained_minimiser_and_solves_otherwise(seed: int) -> None:
+    """With the caller's -H^-1 g: returned as is (0 iterations) when it meets every row;
+    otherwise DAQP's solution, the same as without the hint."""
+    rng = np.random.default_rng(seed)
+    H, g, C, l, u = _random_qp(rng, 6, 20)
+    x_u = -np.linalg.solve(H, g)
+    lean = LeanDenseQp(QpSettings(eps_abs=1e-9))
+    # Violated rows (the generator puts x_u away from the feasible point): DAQP solves.
+    got = lean.solve_x(H, g, C, l, u, x_unconstrained=x_u)
+    want = lean.solve_x(H, g, C, l, u)
+    assert got[1] == "solved" and got[2] > 0
+    np.testing.assert_array_equal(got[0], want[0])
+    # Bounds widened around C x_u: the minimiser itself, no solver call.
+    c = C @ x_u
+    x, status, iterations = lean.solve_x(H, g, C, c - 1.0, c + 1.0, x_unconstrained=x_u)
+    assert (status, iterations) == ("solved", 0)
+    assert x is x_u
+    # DAQP would return the same point to rounding.
+    ref = lean.solve_x(H, g, C, c - 1.0, c + 1.0)
+    np.testing.assert_allclose(ref[0], x_u, rtol=0, atol=1e-9)

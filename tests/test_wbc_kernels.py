@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from locoplan.control import wbc_kernels
+from locoplan.control import qp, wbc_kernels
 from locoplan.plan import compile_plan
 from locoplan.robot.description import load_robot_description
 from locoplan.scenario import load_scenario_file
@@ -34,9 +34,11 @@ def test_the_loop_uses_the_warmed_up_signatures() -> None:
     )
     # At least the warm-up's (other tests in this process may have compiled more).
     before = {name: len(getattr(wbc_kernels, name).signatures) for name in KERNELS}
+    before["meets_rows"] = len(qp._meets_rows.signatures)
     assert min(before.values()) >= 1
     rec = loop.run(1.0)
     assert not rec.fell
     assert any(not all(s) for s in rec.stance)  # a foot swung
     after = {name: len(getattr(wbc_kernels, name).signatures) for name in KERNELS}
+    after["meets_rows"] = len(qp._meets_rows.signatures)
     assert after == before

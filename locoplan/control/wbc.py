@@ -429,9 +429,9 @@ class WholeBodyQp:
         tau_ext: FloatArray,
     ) -> WbcOutput | None:
         """The reduced QP (module docstring), built by the compiled
-        `wbc_kernels.lean_build`; when its unconstrained minimiser meets every bound that is
-        the solution (iterations 0), else DAQP finishes. None when the generic path must
-        take over."""
+        `wbc_kernels.lean_build`, which also returns its unconstrained minimiser:
+        `LeanDenseQp.solve_x` takes that when it meets every bound (iterations 0), else DAQP
+        solves. None when the generic path must take over."""
         t0 = time.perf_counter()
         nc = yaws.shape[0]
         ws = self._workspace(nc)
@@ -451,17 +451,13 @@ class WholeBodyQp:
                 self._lo5,
                 self._hi5,
                 self.tau_limits,
-                ws.qp.settings.eps_abs,
             )
         except np.linalg.LinAlgError:
             return None
         if found < 0:
             return None
         t1 = time.perf_counter()
-        if found == 1:
-            status, iterations = "solved", 0
-        else:
-            y, status, iterations = ws.qp.solve_x(H, g, C, lo, hi)
+        y, status, iterations = ws.qp.solve_x(H, g, C, lo, hi, x_unconstrained=y)
         if status in ("max_iterations", "numerical_error"):
             return None
         ok = status == "solved"

@@ -26,6 +26,8 @@ import numpy as np
 import numpy.typing as npt
 from numba import njit
 
+from locoplan.control import qp
+
 FloatArray = npt.NDArray[np.float64]
 
 NV_BASE = 6
@@ -268,7 +270,6 @@ def lean_build(
     lo5: FloatArray,
     hi5: FloatArray,
     tau_limits: FloatArray,
-    tol: float,
 ) -> tuple[
     FloatArray,
     FloatArray,
@@ -290,9 +291,8 @@ def lean_build(
     u = [tau_lim; hi5...] - shift, shift = [tau0; C5 w5_i], tau0 = a_j - M_jb Y0.
 
     Returns (H, g, C, l, u, tau0, K, Y0, y, status): y is the unconstrained minimiser
-    -H^-1 g; status 1 when it meets every row to `tol` (then it is the QP's solution, as an
-    active-set solver started cold would return at once), 0 when a solver must finish the
-    job, -1 when M_bb or H is not positive definite or the data are not finite."""
+    -H^-1 g (`qp.LeanDenseQp.solve_x` takes it as the solution when it meets every row);
+    status 1, or -1 when the data are not finite."""
     nv = M.shape[0]
     nj = nv - NV_BASE
     nc = yaws.shape[0]
@@ -353,16 +353,10 @@ def lean_build(
                 cw += C5[rr, c] * w5[5 * i + c]
             lo[row] = lo5[rr] - cw
             hi[row] = hi5[rr] - cw
-    # The unconstrained minimiser, and whether it already meets every row.
+    # The unconstrained minimiser (the solver checks whether it meets every row).
     LH = np.linalg.cholesky(H)
     y[:] = -_back_sub_t(LH, _forward_sub(LH, g.reshape(m, 1)))[:, 0]
-    Cy = C.dot(y)
-    status = 1
-    for row in range(nrow):
-        if lo[row] > hi[row] or Cy[row] < lo[row] - tol or Cy[row] > hi[row] + tol:
-            status = 0
-            break
-    return H, g, C, lo, hi, tau0, K, Y0, y, status
+    return H, g, C, lo, hi, tau0, K, Y0, y, 1
 
 
 @njit(cache=True)
@@ -428,6 +422,6 @@ def warm_up(nv: int) -> None:
         np.zeros(1),
         np.zeros(1),
         np.ones(nv - NV_BASE),
-        1e-9,
     )
     lean_finish(tau0, C, K, Y0, y)
+    qp.warm_up()
