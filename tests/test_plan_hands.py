@@ -142,3 +142,14 @@ def test_throw_reaches_commanded_velocity_at_release() -> None:
     assert st.yaw == 0.0
     assert ht.v_L_world == pytest.approx(throw.velocity, abs=1e-12)
     assert ht.v_R_world == pytest.approx(throw.velocity, abs=1e-12)
+
+
+def test_hand_target_arrays_stack_hand_targets_at() -> None:
+    plan = compile_plan(repo_scenario("pick-walk-drop"))
+    for t in np.linspace(0.0, plan.t_end, 37).tolist():
+        pose = ([0.1, -0.2, 0.6], 0.3, [0.2, 0.1, 0.0], 0.4)
+        want = plan.hand_targets_at(t, *pose)
+        pos, vel = plan.hand_target_arrays(t, *pose)
+        # The same float arithmetic, stacked differently.
+        np.testing.assert_array_equal(pos, want.positions)
+        np.testing.assert_array_equal(vel, want.velocities)

@@ -157,6 +157,8 @@ class LocoManipulationController:
             desc.torque_limits, WbcSettings(limits=self.s.limits, backend=self.s.qp_backend)
         )
         self.tau_limits = np.asarray(desc.torque_limits, dtype=float)
+        self._neg_tau_limits = -self.tau_limits
+        self._clip_limits = self.tau_limits * (1.0 + CLIP_RTOL)
         self._last_mpc: MpcSolution | None = None
         self._last_mpc_t = -math.inf
         self._last_contact = (True, True)
@@ -404,6 +406,7 @@ class LocoManipulationController:
         p_feet, R_feet, J_feet, dJv_feet = p_fr[:2], R_fr[:2], J_fr[:2], dJv_fr[:2]
         v_feet = v_fr[:2]
         yaw_feet = np.arctan2(R_feet[:, 1, 0], R_feet[:, 0, 0])
+        M, h = r.M, r.h
         dyn_time = time.perf_counter() - t_dyn
 
         plan = self.plan
@@ -474,9 +477,9 @@ class LocoManipulationController:
             swing_yaw[n_swing] = yaw_des
             n_swing += 1
         # Hand targets.
-        targets = plan.hand_targets_at(t, q[:3], yaw, R.dot(v[:3]), float(omega_w[2]))
-        hand_targets = np.asarray(targets.positions, dtype=float)
-        v_hand_des = np.asarray(targets.velocities, dtype=float)
+        hand_targets, v_hand_des = plan.hand_target_arrays(
+            t, q[:3], yaw, R.dot(v[:3]), float(omega_w[2])
+        )
         J_hands = np.ascontiguousarray(J_fr[2:4, :3])
         p_hands = p_fr[2:4]
         v_hands = v_fr[2:4, :3]
@@ -536,8 +539,8 @@ class LocoManipulationController:
             for i, k in enumerate(idx):
                 w5[5 * i : 5 * i + 5] = wrench_world_to_w5(float(yaw_feet[k]), wrench[k])
             wbc_out = self.wbc.solve_arrays(
-                r.M,
-                r.h,
+                M,
+                h,
                 qdd_cmd,
                 J_feet[idx].reshape(-1, J_feet.shape[2]),
                 yaw_feet[idx],
@@ -546,9 +549,10 @@ class LocoManipulationController:
             )
             tau = wbc_out.tau
         wbc_time = time.perf_counter() - t_w
-        tau_clipped = np.clip(tau, -self.tau_limits, self.tau_limits)
+        # (np.minimum / np.maximum: np.clip costs several times more on 16 values.)
+        tau_clipped = np.minimum(np.maximum(tau, self._neg_tau_limits), self.tau_limits)
         # A torque at its limit to rounding (a QP's active bound) is not a clip.
-        n_clipped = int(np.count_nonzero(np.abs(tau) > self.tau_limits * (1.0 + CLIP_RTOL)))
+        n_clipped = int(np.count_nonzero(np.abs(tau) > self._clip_limits))
         return ControlOutput(
             tau=tau,
             tau_clipped=tau_clipped,

@@ -162,6 +162,36 @@ class Plan:
         add the trunk's motion: `base_velocity` (3,) m/s and `base_yaw_rate` rad/s, by default
         the planned ones at t.
         """
+        b = self._base_pose(t, base_position, base_yaw, base_velocity, base_yaw_rate)
+        pl, vl = self.manipulation.tracks[0].evaluate(t, b)
+        pr, vr = self.manipulation.tracks[1].evaluate(t, b)
+        return HandTargets(np.array(pl), np.array(pr), np.array(vl), np.array(vr))
+
+    def hand_target_arrays(
+        self,
+        t: float,
+        base_position: npt.ArrayLike,
+        base_yaw: float,
+        base_velocity: npt.ArrayLike | None = None,
+        base_yaw_rate: float | None = None,
+    ) -> tuple[FloatArray, FloatArray]:
+        """`hand_targets_at` as (positions (2, 3), velocities (2, 3)), rows left, right: one
+        array each, for a control loop."""
+        b = self._base_pose(t, base_position, base_yaw, base_velocity, base_yaw_rate)
+        pl, vl = self.manipulation.tracks[0].evaluate(t, b)
+        pr, vr = self.manipulation.tracks[1].evaluate(t, b)
+        return np.array((pl, pr), dtype=float), np.array((vl, vr), dtype=float)
+
+    def _base_pose(
+        self,
+        t: float,
+        base_position: npt.ArrayLike,
+        base_yaw: float,
+        base_velocity: npt.ArrayLike | None,
+        base_yaw_rate: float | None,
+    ) -> BasePose:
+        """The trunk pose and velocity the hand tracks are evaluated against (see
+        `hand_targets_at` for the defaults)."""
         if base_velocity is None or base_yaw_rate is None:
             _, _, _, pvx, pvy, pwz = self.trunk.pose_at(t)
             vx, vy, vz = (pvx, pvy, 0.0) if base_velocity is None else _xyz(base_velocity)
@@ -170,10 +200,7 @@ class Plan:
             vx, vy, vz = _xyz(base_velocity)
             wz = float(base_yaw_rate)
         bx, by, bz = _xyz(base_position)
-        b = BasePose(bx, by, bz, math.cos(base_yaw), math.sin(base_yaw), vx, vy, vz, wz)
-        pl, vl = self.manipulation.tracks[0].evaluate(t, b)
-        pr, vr = self.manipulation.tracks[1].evaluate(t, b)
-        return HandTargets(np.array(pl), np.array(pr), np.array(vl), np.array(vr))
+        return BasePose(bx, by, bz, math.cos(base_yaw), math.sin(base_yaw), vx, vy, vz, wz)
 
     def hand_active(self, hand: int | str, t: float) -> bool:
         """Whether the hand follows a task target (during its manipulation tasks and while it
