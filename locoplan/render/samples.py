@@ -6,8 +6,8 @@ order), the planned stance flags and the label of the active tasks. The closed l
 same values to the live video recorder and writes them to the log's ``/sim/qpos`` topic
 (JSON; bit for bit with the writer's default encoding, rounded to the writer's
 `json_decimals` otherwise: 6 places in `locoplan run`, a micrometre or a microradian, which
-no frame shows); `locoplan render` decodes them again. Both paths then go through `FrameClock`, so `run --video` and `render` turn the
-same samples into the same frames.
+no frame shows); `locoplan render` decodes them again. Both paths then go through
+`FrameClock`, so `run --video` and `render` turn the same samples into the same frames.
 
 Times are compared as integer nanoseconds (as the log stores them), never as floats.
 """
