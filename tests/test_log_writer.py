@@ -397,3 +397,17 @@ def test_messages_hold_the_values_of_the_call(tmp_path: Path) -> None:
         assert tf.transforms[0].translation.z == float(k)
     for k, (_, js) in enumerate(log.messages("/joint_states")):
         assert [j.effort for j in js.joints] == [float(k)] * 4
+
+
+def test_unsupported_values_raise_at_the_call(tmp_path: Path) -> None:
+    """Queued encoding must not move an encoding error away from the call that caused it."""
+    with RunLogWriter(tmp_path / "e.mcap", scenario_name="e", scenario_text="") as w:
+        w.json("/x", 0.0, {"a": np.zeros(2)})
+        for bad in (np.array([object()]), [object()], {"k": object()}, object()):
+            with pytest.raises(TypeError):
+                w.json("/x", 0.1, {"a": bad})
+        w.json("/x", 0.2, {"a": np.ones(2)})
+    assert [m["a"] for _, m in read_log(tmp_path / "e.mcap").messages("/x")] == [
+        [0.0] * 2,
+        [1.0] * 2,
+    ]

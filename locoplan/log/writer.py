@@ -389,18 +389,20 @@ class RunLogWriter:
             return
         self._closed = True
         try:
-            self._drain()
-            end_ns = time.time_ns()
-            self._writer.write_metadata(
-                topics.METADATA_RUN_END,
-                {
-                    "status": status,
-                    "end_wall_time": _iso(end_ns),
-                    "end_wall_time_ns": str(end_ns),
-                    "last_log_time_ns": str(self._last_ns),
-                    "message_count": str(self._message_count),
-                },
-            )
+            try:
+                self._drain()
+            finally:
+                end_ns = time.time_ns()
+                self._writer.write_metadata(
+                    topics.METADATA_RUN_END,
+                    {
+                        "status": status,
+                        "end_wall_time": _iso(end_ns),
+                        "end_wall_time_ns": str(end_ns),
+                        "last_log_time_ns": str(self._last_ns),
+                        "message_count": str(self._message_count),
+                    },
+                )
         finally:
             self._writer.close()
 
@@ -460,6 +462,8 @@ class RunLogWriter:
         for key, value in payload.items():
             kind = type(value)
             if kind is np.ndarray:
+                if value.dtype.kind not in "biuf":
+                    return self._encode_json(payload)  # raises TypeError here, not later
                 value = value.copy()
             elif kind is list or kind is tuple:
                 if not all(type(v) in _SCALARS for v in value):
