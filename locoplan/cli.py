@@ -41,6 +41,9 @@ out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
 
 
+PREPARING = "preparing (a first run on this machine compiles kernels, ~25 s)"
+
+
 def _sim_progress(show: bool, label_width: int = 0) -> Progress:
     """A progress display in simulated seconds (one bar per run); silent unless `show`."""
     width = f":<{label_width}" if label_width else ""
@@ -337,10 +340,13 @@ def run_command(
     log_hint = Path(out_dir) / f"{scenario.name}.mcap"
     try:
         with _sim_progress(show) as bar:
-            task_id = bar.add_task(scenario.name, total=1.0)
+            # Until the first simulated step: building the scene and the controller, which on
+            # a machine's first run also compiles the numeric kernels (numba, about 25 s,
+            # cached afterwards).
+            task_id = bar.add_task(f"{scenario.name}: {PREPARING}", total=1.0)
 
             def on_progress(t: float, total: float) -> None:
-                bar.update(task_id, completed=t, total=total)
+                bar.update(task_id, completed=t, total=total, description=scenario.name)
 
             result = run_scenario(scenario, text, options, on_progress)
     except PlanError as exc:
