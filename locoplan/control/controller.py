@@ -58,6 +58,7 @@ LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (g
 LOAD_RAMP_DOWN = 0.6  # s
 LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
 FEET = ("L", "R")
+OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
 
 
@@ -167,6 +168,7 @@ class LocoManipulationController:
         # (10 ms) and shared by the MPC's horizon and the swing trajectories.
         self._footholds: dict[tuple[int, float], tuple[FloatArray, float]] = {}
         self._shift_now = np.zeros(2)
+        self._object_cache: dict[int, FloatArray] = {}
         # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
         self._cols_leg = [np.arange(6, 11), np.arange(11, 16)]
         self._cols_arm = [np.arange(16, 19), np.arange(19, 22)]
@@ -309,19 +311,13 @@ class LocoManipulationController:
             foot_yaw[at, k] = fh[1]
         obj_mass = self.carried_mass(times)
         held = obj_mass > 0.0
-        if held.any():
-            p_obj = np.asarray(plan.object_positions(times, pb_all[:N], yaw_ref), dtype=float)
-        else:
-            # What object_positions gives where nothing is held: the trunk position.
-            p_obj = pb_all[:N].copy()
+        # Where nothing is held object_positions gives the trunk position: skip the call.
+        p_obj = self._planned_object_positions(times) if held.any() else pb_all[:N].copy()
         if mass_now > 0.0:
             # Feedback on where the load really is: the object sits between the hands, which
             # lag their planned path (most when the robot turns with a load); shift the
             # planned object path by today's error.
-            planned_now = np.asarray(
-                plan.object_positions(np.array([t]), pb_all[N : N + 1], yaw_all[N : N + 1]),
-                dtype=float,
-            )[0]
+            planned_now = self._planned_object_positions(np.array([t]))[0]
             p_obj = p_obj + (p_hands_mid - planned_now)
         x_ref[:, 3:5] += self._com_shift(times)
         inp = MpcInput(
@@ -340,6 +336,29 @@ class LocoManipulationController:
             model=self.s.model,
         )
         return self.mpc.update(inp)
+
+    def _planned_object_positions(self, times: FloatArray) -> FloatArray:
+        """`Plan.object_positions` (n, 3) along the planned trunk path, memoised per
+        microsecond of `times` (evaluated at the rounded times, < 0.5 us off).
+
+        Why: the plan evaluates the hand tracks point by point (about 10 us each), and an
+        MPC update with a held load needs some 40 points (the horizon, the CoM shift 0.3 s
+        ahead, now): 0.45 ms per update in scenarios/package-transfer.yaml. The horizon's
+        times (t + 0.03 k, t on a 10 ms grid) come back every third update, so nearly every
+        point is already known."""
+        keys = np.rint(np.asarray(times, dtype=float) * 1e6).astype(np.int64).tolist()
+        cache = self._object_cache
+        missing = sorted({k for k in keys if k not in cache})
+        if missing:
+            pos = self.plan.object_positions(np.asarray(missing, dtype=float) * 1e-6)
+            for k, p in zip(missing, np.asarray(pos, dtype=float), strict=True):
+                cache[k] = p
+            if len(cache) > OBJECT_CACHE_SIZE:
+                # Drop what lies in the past of the earliest time asked for now.
+                oldest = min(keys)
+                for k in [k for k in cache if k < oldest]:
+                    del cache[k]
+        return np.array([cache[k] for k in keys])
 
     def carried_mass(self, times: FloatArray) -> FloatArray:
         """Mass (kg) the hands carry at `times` (n,): each held object's mass times a load
@@ -382,9 +401,8 @@ class LocoManipulationController:
         out = np.zeros((t_lead.shape[0], 2))
         if not np.any(mass > 0.0):
             return out
-        p_com, _, yaw, _, p_base = self._com_reference(t_lead)
-        p_obj = np.asarray(self.plan.object_positions(t_lead, p_base, yaw), dtype=float)
-        d = p_obj[:, :2] - p_com[:, :2]
+        p_com = self._com_reference(t_lead)[0]
+        d = self._planned_object_positions(t_lead)[:, :2] - p_com[:, :2]
         return -(mass / (self.mass + mass))[:, None] * d
 
     # -- the tick ------------------------------------------------------------------------------
