@@ -280,11 +280,15 @@ class Plan:
         base_positions: npt.ArrayLike | None = None,
         base_yaws: npt.ArrayLike | None = None,
     ) -> FloatArray:
-        """Centre (n, 3) m world of the held object at `times` (n,), from the hand targets for
-        the given trunk poses (origins (n, 3) m, yaws (n,) rad; default: the planned
-        reference). Where nothing is held: the trunk position (so r_e = 0 there). A one-hand
-        hold puts the centre half the grip width from the hand towards the trunk's centre line
-        (an approximation)."""
+        """Where the held object is held (n, 3) m world at `times` (n,): the midpoint of the
+        hand targets for the given trunk poses (origins (n, 3) m, yaws (n,) rad; default: the
+        planned reference). That is the object's centre when it is gripped at its centre and
+        `ObjectHold.grip_height` above it for a box carried through locomotion (it hangs
+        level below the grip). The MPC uses it as the point where the object's weight acts:
+        with a vertical force only x and y matter to the moment (Model 2); Model 1's combined
+        inertia sees the grip height too (a few cm). Where nothing is held: the trunk
+        position (so r_e = 0 there). A one-hand hold puts the point half the grip width from
+        the hand towards the trunk's centre line (an approximation)."""
         times = np.asarray(times, dtype=float)
         ref = self.trunk.evaluate(times)
         pos_b = ref.position if base_positions is None else np.asarray(base_positions, float)
