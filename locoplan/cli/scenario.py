@@ -1,0 +1,96 @@
+"""`locoplan validate` and `locoplan schema`: check task scripts, print their JSON Schema."""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+
+from locoplan.cli.common import EXIT_BAD_INPUT, EXIT_OK, _fail, app, err, out
+
+_VALIDATE_FILES = typer.Argument(
+    ...,
+    metavar="FILE",
+    help="Task scripts to check (YAML); '-' reads one from standard input.",
+    show_default=False,
+)
+
+
+@app.command("validate")
+def validate_command(files: list[str] = _VALIDATE_FILES) -> None:
+    """Check task scripts against the format; nothing is simulated.
+
+    Prints 'ok   FILE (name, N tasks)' for a valid file,
+    and 'FILE:LINE:COLUMN: message' for each problem of an invalid one.
+    Exit status 0 when every file is valid, 2 otherwise.
+
+    Examples:
+
+      locoplan validate scenarios/*.yaml
+
+      cat my-task.yaml | locoplan validate -
+    """
+    from locoplan.exceptions import ScenarioError
+    from locoplan.scenario import load_scenario_file
+    from locoplan.scenario.source import MAX_BYTES
+
+    stdin_data: bytes | str | None = None
+    all_ok = True
+    for name in files:
+        text: bytes | str | None = None
+        if name == "-":
+            if stdin_data is None:  # read once; a second '-' sees the same text
+                buffer = getattr(sys.stdin, "buffer", None)
+                stdin_data = buffer.read(MAX_BYTES + 1) if buffer else sys.stdin.read()
+            text = stdin_data
+        try:
+            loaded = load_scenario_file(name, text)
+        except ScenarioError as exc:
+            all_ok = False
+            for issue in exc.issues:
+                out.print(str(issue), markup=False, emoji=False, highlight=False)
+            continue
+        n = len(loaded.scenario.tasks)
+        shown = "<stdin>" if name == "-" else name
+        summary = f"ok   {shown} ({loaded.scenario.name}, {n} task{'' if n == 1 else 's'})"
+        out.print(summary, markup=False, emoji=False, highlight=False)
+    raise typer.Exit(EXIT_OK if all_ok else EXIT_BAD_INPUT)
+
+
+_SCHEMA_OUT = typer.Option(
+    None,
+    "--out",
+    metavar="PATH",
+    help="Write the schema to this file instead of standard output.",
+    dir_okay=False,
+)
+
+
+@app.command("schema")
+def schema_command(out_path: str | None = _SCHEMA_OUT) -> None:
+    """Print the JSON Schema (draft 2020-12) of the task-script format.
+
+    For editors (YAML language servers) and CI linters.
+    Semantic rules (objects held before a drop, no overlapping locomotion)
+    are checked by 'locoplan validate' only.
+
+    Examples:
+
+      locoplan schema > locoplan-task.schema.json
+
+      locoplan schema --out .vscode/locoplan-task.schema.json
+    """
+    import json
+    from pathlib import Path
+
+    from locoplan.scenario import scenario_json_schema
+
+    text = json.dumps(scenario_json_schema(), indent=2, ensure_ascii=False) + "\n"
+    if out_path is None:
+        out.print(text, end="", markup=False, emoji=False, highlight=False)
+        return
+    try:
+        Path(out_path).write_text(text, encoding="utf-8")
+    except OSError as exc:
+        _fail(EXIT_BAD_INPUT, f"cannot write {out_path}: {exc.strerror or exc}")
+    err.print(f"wrote {out_path}", markup=False, emoji=False, highlight=False)
