@@ -1,4 +1,4 @@
-"""`locoplan validate` and `locoplan schema` (the scenario section of locoplan/cli.py).
+"""`locoplan validate` and `locoplan schema` (locoplan/cli/scenario.py).
 
 Every file in tests/data/scenarios/bad/ states the issues it must produce in header comments
 `# expect: LINE:COLUMN: message`; the command must print exactly those issues (same
