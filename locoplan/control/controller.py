@@ -1,9 +1,10 @@
 """The loco-manipulation controller: multi-contact MPC + swing/hand PD + whole-body mapping.
 
-One `step(state)` per control tick (1 kHz). Every `mpc_period` (10 ms) the MPC is re-solved
-over its horizon (20 x 0.03 s) with the compiled plan's contact schedule, trunk reference,
-planned footholds and held-object force inside the horizon. In between, the latest MPC
-wrenches are applied (zeroed for a foot that has since lifted off).
+One `step(state)` per control tick (500 Hz; the loop holds the torques for two 1 ms physics
+steps). Every `mpc_period` (10 ms) the MPC is re-solved over its horizon (20 x 0.03 s) with
+the compiled plan's contact schedule, trunk reference, planned footholds and held-object force
+inside the horizon. In between, the latest MPC wrenches are applied (zeroed for a foot that
+has since lifted off).
 
 Why the MPC is re-solved every 10 ms rather than every 30 ms: with the true composite inertia
 (pitch about 0.6 kg m^2 rather than the trunk's 0.15) a 30 ms update made pitch oscillate at
