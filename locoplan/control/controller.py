@@ -288,7 +288,14 @@ class LocoManipulationController:
         td = np.stack([plan.stance_starts(k, times) for k in range(2)])
         future = td > t + 1e-9
         keys = sorted({(k, x) for k in range(2) for x in td[k][future[k]].tolist()})
-        eval_times = np.concatenate([times, [t], [x for _, x in keys]])
+        # The held-load CoM shift's lead times join the same evaluation when a load is on.
+        t_lead = times + LOAD_LEAD
+        mass_lead = self.carried_mass(t_lead)
+        loaded = bool(np.any(mass_lead > 0.0))
+        n_td = len(keys)
+        eval_times = np.concatenate(
+            [times, [t], [x for _, x in keys], t_lead if loaded else np.zeros(0)]
+        )
         p_all, v_all, yaw_all, w_all, pb_all = self._com_reference(eval_times)
         p_ref, v_ref, yaw_ref, w_ref = p_all[:N], v_all[:N], yaw_all[:N], w_all[:N]
         x_ref = np.zeros((N, 15))
@@ -320,7 +327,8 @@ class LocoManipulationController:
             # planned object path by today's error.
             planned_now = self._planned_object_positions(np.array([t]))[0]
             p_obj = p_obj + (p_hands_mid - planned_now)
-        x_ref[:, 3:5] += self._com_shift(times)
+        if loaded:
+            x_ref[:, 3:5] += self._com_shift_at(t_lead, mass_lead, p_all[N + 1 + n_td :])
         inp = MpcInput(
             x0=x0,
             x_ref=x_ref,
@@ -399,10 +407,13 @@ class LocoManipulationController:
         (onto its heels, which is feasible without the load) just before the weight comes on."""
         t_lead = np.asarray(times, dtype=float) + LOAD_LEAD
         mass = self.carried_mass(t_lead)
-        out = np.zeros((t_lead.shape[0], 2))
         if not np.any(mass > 0.0):
-            return out
-        p_com = self._com_reference(t_lead)[0]
+            return np.zeros((t_lead.shape[0], 2))
+        return self._com_shift_at(t_lead, mass, self._com_reference(t_lead)[0])
+
+    def _com_shift_at(self, t_lead: FloatArray, mass: FloatArray, p_com: FloatArray) -> FloatArray:
+        """`_com_shift` from the lead times (n,), the carried mass there (n,) kg and the CoM
+        reference there (n, 3) m."""
         d = self._planned_object_positions(t_lead)[:, :2] - p_com[:, :2]
         return -(mass / (self.mass + mass))[:, None] * d
 
