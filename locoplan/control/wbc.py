@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -287,26 +287,8 @@ class WholeBodyQp:
         tau_ext: FloatArray,
     ) -> WbcOutput | None:
         """`relaxed_problem` solved; None when it has no solution either."""
-        t0 = time.perf_counter()
-        problem, a, B = self.relaxed_problem(M, h, qdd_cmd, stance, tau_ext)
-        t1 = time.perf_counter()
-        sol = self._solver.solve(problem)
-        if not sol.ok:
-            return None
-        tau_full = a + B @ sol.x
-        nc = len(stance)
-        w5 = tuple(stance[i].w5 + sol.x[NV_BASE + 5 * i : NV_BASE + 5 * i + 5] for i in range(nc))
-        return WbcOutput(
-            tau=tau_full[NV_BASE:],
-            w5=w5,
-            delta_base=sol.x[:NV_BASE].copy(),
-            ok=True,
-            status="solved_relaxed_joints",
-            iterations=sol.iterations,
-            build_time_s=t1 - t0,
-            solve_time_s=time.perf_counter() - t1,
-            delta_joint=sol.x[NV_BASE + 5 * nc :].copy(),
-        )
+        out = self._solve_full(M, h, qdd_cmd, stance, tau_ext, relax_joints=True)
+        return replace(out, status="solved_relaxed_joints") if out.ok else None
 
     def _relax_if_infeasible(
         self,
@@ -392,8 +374,22 @@ class WholeBodyQp:
         stance: list[StanceContact],
         tau_ext: FloatArray,
     ) -> WbcOutput:
+        return self._solve_full(M, h, qdd_cmd, stance, tau_ext, relax_joints=False)
+
+    def _solve_full(
+        self,
+        M: FloatArray,
+        h: FloatArray,
+        qdd_cmd: FloatArray,
+        stance: list[StanceContact],
+        tau_ext: FloatArray,
+        relax_joints: bool,
+    ) -> WbcOutput:
+        """`full_problem` (or `relaxed_problem`) through the generic solver; without a
+        solution, no relaxation at all (x = 0)."""
         t0 = time.perf_counter()
-        problem, a, B = self.full_problem(M, h, qdd_cmd, stance, tau_ext)
+        build = self.relaxed_problem if relax_joints else self.full_problem
+        problem, a, B = build(M, h, qdd_cmd, stance, tau_ext)
         t1 = time.perf_counter()
         sol = self._solver.solve(problem)
         x = sol.x if sol.ok else np.zeros(problem.n)
@@ -409,6 +405,7 @@ class WholeBodyQp:
             iterations=sol.iterations,
             build_time_s=t1 - t0,
             solve_time_s=time.perf_counter() - t1,
+            delta_joint=x[NV_BASE + 5 * nc :].copy() if relax_joints else None,
         )
 
     def _workspace(self, nc: int) -> _Workspace:
