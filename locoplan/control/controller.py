@@ -288,8 +288,9 @@ class LocoManipulationController:
         td = np.stack([plan.stance_starts(k, times) for k in range(2)])
         future = td > t + 1e-9
         keys = sorted({(k, x) for k in range(2) for x in td[k][future[k]].tolist()})
-        # The held-load CoM shift's lead times join the same evaluation when a load is on.
-        t_lead = times + LOAD_LEAD
+        # The held-load CoM shift now and at the horizon's steps (lead times t + LOAD_LEAD and
+        # times + LOAD_LEAD) joins the same evaluation when a load is on.
+        t_lead = np.concatenate([[t], times]) + LOAD_LEAD
         mass_lead = self.carried_mass(t_lead)
         loaded = bool(np.any(mass_lead > 0.0))
         n_td = len(keys)
@@ -297,6 +298,14 @@ class LocoManipulationController:
             [times, [t], [x for _, x in keys], t_lead if loaded else np.zeros(0)]
         )
         p_all, v_all, yaw_all, w_all, pb_all = self._com_reference(eval_times)
+        shift = (
+            self._com_shift(t_lead, mass_lead, p_all[N + 1 + n_td :])
+            if loaded
+            else np.zeros((N + 1, 2))
+        )
+        # Updated with the MPC and held in between (it follows the load ramp, about 1 mm per
+        # MPC period at most): the footholds below and the trunk task use it.
+        self._shift_now = shift[0]
         p_ref, v_ref, yaw_ref, w_ref = p_all[:N], v_all[:N], yaw_all[:N], w_all[:N]
         x_ref = np.zeros((N, 15))
         x_ref[:, 2] = yaw_ref
@@ -327,8 +336,7 @@ class LocoManipulationController:
             # planned object path by today's error.
             planned_now = self._planned_object_positions(np.array([t]))[0]
             p_obj = p_obj + (p_hands_mid - planned_now)
-        if loaded:
-            x_ref[:, 3:5] += self._com_shift_at(t_lead, mass_lead, p_all[N + 1 + n_td :])
+        x_ref[:, 3:5] += shift[1:]
         inp = MpcInput(
             x0=x0,
             x_ref=x_ref,
@@ -394,7 +402,7 @@ class LocoManipulationController:
             out += h.mass * frac
         return out
 
-    def _com_shift(self, times: FloatArray) -> FloatArray:
+    def _com_shift(self, t_lead: FloatArray, mass: FloatArray, p_com: FloatArray) -> FloatArray:
         """CoM reference shift (n, 2) for held loads: the combined CoM of robot and object over
         the support centre. (m p_c + m_o p_o) = (m + m_o) s with p_o = p_c + d gives
         p_c = s - m_o d / (m + m_o). Without it the MPC, which sees only 0.6 s ahead, does not
@@ -404,16 +412,10 @@ class LocoManipulationController:
         load 0.35 m ahead comes on, its pitch torque (27 N m) exceeds what the line feet can
         answer (toe-loaded CoP, 0.09 m x 245 N = 22 N m), and moving the CoM back then needs a
         backward push whose own pitch torque makes it worse. So the robot starts leaning back
-        (onto its heels, which is feasible without the load) just before the weight comes on."""
-        t_lead = np.asarray(times, dtype=float) + LOAD_LEAD
-        mass = self.carried_mass(t_lead)
-        if not np.any(mass > 0.0):
-            return np.zeros((t_lead.shape[0], 2))
-        return self._com_shift_at(t_lead, mass, self._com_reference(t_lead)[0])
+        (onto its heels, which is feasible without the load) just before the weight comes on.
 
-    def _com_shift_at(self, t_lead: FloatArray, mass: FloatArray, p_com: FloatArray) -> FloatArray:
-        """`_com_shift` from the lead times (n,), the carried mass there (n,) kg and the CoM
-        reference there (n, 3) m."""
+        From the lead times t_lead (n,) (the times concerned + LOAD_LEAD), the carried mass
+        there (n,) kg and the CoM reference there (n, 3) m."""
         d = self._planned_object_positions(t_lead)[:, :2] - p_com[:, :2]
         return -(mass / (self.mass + mass))[:, None] * d
 
@@ -457,10 +459,6 @@ class LocoManipulationController:
         mpc_sol: MpcSolution | None = None
         mpc_time = 0.0
         if contact_changed or t - self._last_mpc_t >= self.s.mpc_period - 1e-9:
-            # The held-load CoM shift, updated with the MPC and held in between (it follows
-            # the load ramp, about 1 mm per MPC period at most): the footholds and the trunk
-            # task use it.
-            self._shift_now = self._com_shift(np.array([t]))[0]
             yaw_ref_now = float(ref.yaw)
             yaw_meas = yaw_ref_now + wrap_angle(yaw - yaw_ref_now)
             x0 = np.concatenate([[roll, pitch, yaw_meas], p_c, omega_w, v_c, [0, 0, -GRAVITY]])
