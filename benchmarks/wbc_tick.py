@@ -26,7 +26,7 @@ import numpy as np
 
 import locoplan.control.controller as controller_module
 from locoplan.control.tasks import TaskGains
-from locoplan.control.wbc import StanceContact, WholeBodyQp, prioritized_rows
+from locoplan.control.wbc import WholeBodyQp, prioritized_rows
 from locoplan.control.wbc_kernels import stack_tasks
 from locoplan.plan import compile_plan
 from locoplan.robot.description import load_robot_description
@@ -40,7 +40,7 @@ GAIN_FIELDS = TaskGains.__slots__
 
 def record(scenario_path: str, seconds: float, every: int) -> dict[str, np.ndarray]:
     """Run the scenario closed loop for `seconds` and keep every `every`-th WBC tick's inputs
-    and every tick at a contact switch (arrays stacked over ticks; see `tick_inputs` for how
+    and every tick at a contact switch (arrays stacked over ticks; see `kernel_inputs` for how
     they map back)."""
     loaded = load_scenario_file(scenario_path)
     sc = loaded.scenario
@@ -152,9 +152,9 @@ def record(scenario_path: str, seconds: float, every: int) -> dict[str, np.ndarr
     return out
 
 
-def tick_inputs(rec: dict[str, np.ndarray], i: int) -> tuple[tuple[Any, ...], dict[str, Any]]:
-    """(build_tasks arguments, the rest of the tick: M, h, stance contacts, tau_ext) of tick i."""
-    gains = TaskGains(
+def recorded_gains(rec: dict[str, np.ndarray]) -> TaskGains:
+    """The task gains of a recording (the same for every tick)."""
+    return TaskGains(
         *(
             tuple(float(x) for x in rec[f"gain_{f}"])
             if rec[f"gain_{f}"].size > 1
@@ -162,46 +162,6 @@ def tick_inputs(rec: dict[str, np.ndarray], i: int) -> tuple[tuple[Any, ...], di
             for f in GAIN_FIELDS
         )
     )
-    stance = tuple(bool(s) for s in rec["stance"][i])
-    swing = [
-        (
-            rec["swing_pva"][i, j, 0],
-            rec["swing_pva"][i, j, 1],
-            rec["swing_pva"][i, j, 2],
-            float(rec["swing_yaw"][i, j]),
-        )
-        for j in range(int(rec["n_swing"][i]))
-    ]
-    args = (
-        gains,
-        rec["q"][i],
-        rec["v"][i],
-        rec["R"][i],
-        rec["omega"][i],
-        rec["p_des"][i],
-        rec["v_des"][i],
-        float(rec["yaw_des"][i]),
-        float(rec["yaw_rate_des"][i]),
-        rec["J_base"][i],
-        rec["dJv_base"][i],
-        stance,
-        list(rec["J_feet"][i]),
-        list(rec["dJv_feet"][i]),
-        list(rec["v_feet"][i]),
-        rec["p_feet"][i],
-        list(rec["R_feet"][i]),
-        swing,
-        list(rec["J_hands"][i]),
-        list(rec["dJv_hands"][i]),
-        rec["hand_acc"][i],
-    )
-    contacts = [
-        StanceContact(rec["J_feet"][i, k], float(rec["contact_yaw"][i, k]), rec["contact_w5"][i, k])
-        for k in range(2)
-        if stance[k]
-    ]
-    rest = {"M": rec["M"][i], "h": rec["h"][i], "contacts": contacts, "tau_ext": rec["tau_ext"][i]}
-    return args, rest
 
 
 def _other_work(rng: np.random.Generator) -> None:
@@ -217,8 +177,7 @@ def _other_work(rng: np.random.Generator) -> None:
 def kernel_inputs(rec: dict[str, np.ndarray], i: int) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
     """Tick i as the controller passes it: (`stack_tasks` arguments, `solve_arrays` arguments
     after qdd_cmd, i.e. M, h, Jc, yaws, w5, tau_ext)."""
-    args, _ = tick_inputs(rec, i)
-    gains = args[0].packed()
+    gains = recorded_gains(rec).packed()
     stance = rec["stance"][i]
     kargs = (
         gains,
