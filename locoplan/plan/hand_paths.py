@@ -37,6 +37,24 @@ def tuck_waypoint(hand: int, width: float) -> HandWaypoint:
     return HandWaypoint((x, SIDE[hand] * width, z), "trunk")
 
 
+def initial_waypoint(
+    hand: int, trunk: TrunkPath, obstacles: tuple[Obstacle, ...], until: float
+) -> HandWaypoint:
+    """Where the hand starts (and rests until its first task): the default pose, unless that
+    pose comes within APPROACH_CLEARANCE of an object or fixture on [0, until] (s) along the
+    planned trunk path (a box on a table 0.20-0.28 m ahead overlaps hands held 0.28 m ahead;
+    turning towards a table sweeps them into it); then the tucked pose, which stays within
+    0.185 m of the trunk axis. The simulator starts the arms in this pose, so a scene laid out
+    close to the robot is not touched before the plan means to."""
+    default = default_waypoint(hand)
+    idle = make_track(HAND_NAMES[hand], default, [])
+    c = track_clearance(idle, trunk, obstacles, 0.0, max(until, 0.0), k.APPROACH_CLEARANCE)
+    import os
+    if c.first_below is None or os.environ.get('NOTUCK'):
+        return default
+    return tuck_waypoint(hand, k.HAND_TUCK_IN_TRUNK[1])
+
+
 def grip_height(obj: ObjectSpec) -> float:
     """How far above its centre (m) a box carried through a walk, turn or steps is gripped:
     GRASP_ABOVE_CENTRE (at most up to HAND_RADIUS + GRASP_TOP_MARGIN below its top). Two point
@@ -93,10 +111,13 @@ def path_clearance(
     obstacles: tuple[Obstacle, ...],
     threshold: float,
     give_up_below: float = -math.inf,
+    initial: HandWaypoint | None = None,
 ) -> Clearance:
     """Clearance on [t0, t1] (s) of the hand's track made of the segments `done` so far and
-    the candidate segments `extra` (see `track_clearance` for `give_up_below`)."""
-    track = make_track(HAND_NAMES[hand], default_waypoint(hand), done + extra)
+    the candidate segments `extra`, from the `initial` waypoint (default: the default pose;
+    see `track_clearance` for `give_up_below`)."""
+    start = default_waypoint(hand) if initial is None else initial
+    track = make_track(HAND_NAMES[hand], start, done + extra)
     return track_clearance(track, trunk, obstacles, t0, t1, threshold, give_up_below=give_up_below)
 
 
@@ -110,8 +131,10 @@ def approach_segments(
     tuck_y: float,
     trunk: TrunkPath,
     obstacles: tuple[Obstacle, ...],
+    initial: HandWaypoint | None = None,
 ) -> list[HandSegment]:
-    """Segments that bring the hand from where `done` leaves it to `target` at t_end (s).
+    """Segments that bring the hand from where `done` leaves it (or from `initial`, default the
+    default pose, when nothing is done yet) to `target` at t_end (s).
 
     Directly (a straight blend from `start`, s) when that keeps APPROACH_CLEARANCE from every
     obstacle along the planned trunk path (with the yaw off by as much as it may be);
@@ -123,7 +146,8 @@ def approach_segments(
     beside the object) only has to get no closer (within APPROACH_SLACK). If no tucked path is
     clear, the one with the largest clearance wins.
     """
-    cur = done[-1].end if done else default_waypoint(hand)
+    first = default_waypoint(hand) if initial is None else initial
+    cur = done[-1].end if done else first
     t_free = done[-1].t1 if done else 0.0
 
     def gap(
@@ -133,7 +157,9 @@ def approach_segments(
         threshold: float,
         give_up_below: float = -math.inf,
     ) -> Clearance:
-        return path_clearance(hand, done, extra, t0, t1, trunk, obstacles, threshold, give_up_below)
+        return path_clearance(
+            hand, done, extra, t0, t1, trunk, obstacles, threshold, give_up_below, first
+        )
 
     direct = [HandSegment(start, t_end, cur, target, task_index, "reach")]
     threshold = min(

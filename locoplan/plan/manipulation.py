@@ -49,6 +49,7 @@ from locoplan.plan.hand_paths import (
     carry_forward,
     default_waypoint,
     grip_height,
+    initial_waypoint,
     retreat_segments,
     throw_line,
     world_to_trunk,
@@ -162,14 +163,29 @@ class _Builder:
     drift: dict[str, tuple[tuple[float, float], float]] = field(default_factory=dict)
     targets: dict[str, ObjectTarget] = field(default_factory=dict)
     events: list[PlanEvent] = field(default_factory=list)
+    initial: tuple[HandWaypoint, HandWaypoint] = field(
+        default_factory=lambda: (default_waypoint(0), default_waypoint(1))
+    )
 
     def __post_init__(self) -> None:
         for name, obj in self.scenario.objects.items():
             p = obj.position
             self.state[name] = (p[0], p[1], p[2], math.radians(obj.yaw))
+        # Each hand rests where it starts until its first manipulation task (or the end).
+        firsts = [math.inf, math.inf]
+        for t in self.tasks:
+            if t.action in ("pick", "drop", "throw"):
+                for h in _HANDS_OF[t.hands or "both"]:
+                    firsts[h] = min(firsts[h], t.start)
+        last = max((t.end for t in self.tasks), default=0.0)
+        obstacles = self.obstacles()
+        self.initial = (
+            initial_waypoint(0, self.trunk, obstacles, min(firsts[0], last)),
+            initial_waypoint(1, self.trunk, obstacles, min(firsts[1], last)),
+        )
 
     def current(self, h: int) -> HandWaypoint:
-        return self.segments[h][-1].end if self.segments[h] else default_waypoint(h)
+        return self.segments[h][-1].end if self.segments[h] else self.initial[h]
 
     def add(self, h: int, seg: HandSegment) -> None:
         self.segments[h].append(seg)
@@ -270,7 +286,16 @@ class _Builder:
             i = task.index
             tuck_y = max(k.HAND_TUCK_IN_TRUNK[1], half + k.GRASP_CLEARANCE)
             approach = approach_segments(
-                h, self.segments[h], task.start, i, w_pre, t_reach, tuck_y, self.trunk, obstacles
+                h,
+                self.segments[h],
+                task.start,
+                i,
+                w_pre,
+                t_reach,
+                tuck_y,
+                self.trunk,
+                obstacles,
+                self.initial[h],
             )
             for seg in approach:
                 self.add(h, seg)
@@ -487,8 +512,8 @@ class _Builder:
         )
         return ManipulationPlan(
             tracks=(
-                make_track("L", default_waypoint(0), self.segments[0]),
-                make_track("R", default_waypoint(1), self.segments[1]),
+                make_track("L", self.initial[0], self.segments[0]),
+                make_track("R", self.initial[1], self.segments[1]),
             ),
             contacts=contacts,
             contact_intervals=(

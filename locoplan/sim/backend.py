@@ -16,7 +16,7 @@ import numpy.typing as npt
 from numba import njit
 
 from locoplan.robot.conventions import mj_to_pin_state
-from locoplan.robot.mujoco_model import nominal_qpos
+from locoplan.robot.mujoco_model import joint_qpos_indices, joint_qvel_indices, nominal_qpos
 from locoplan.sim.scene import Scene
 
 FloatArray = npt.NDArray[np.float64]
@@ -115,8 +115,16 @@ class MujocoBackend:
         self.ctrl_high = np.asarray(m.actuator_ctrlrange[:, 1]).copy()
 
     # -- lifecycle ---------------------------------------------------------------------------
-    def reset(self, base_xy: tuple[float, float] = (0.0, 0.0), base_yaw: float = 0.0) -> None:
-        """Put the robot in its nominal standing pose at `base_xy`, yaw `base_yaw` (rad)."""
+    def reset(
+        self,
+        base_xy: tuple[float, float] = (0.0, 0.0),
+        base_yaw: float = 0.0,
+        hands_in_trunk: tuple[tuple[float, float, float], ...] | None = None,
+    ) -> None:
+        """Put the robot in its nominal standing pose at `base_xy`, yaw `base_yaw` (rad); with
+        `hands_in_trunk` (one point per hand, m, trunk origin and yaw frame, in the robot
+        description's hand order), the arms are posed so that the hand sites sit there (the
+        plan starts the hands tucked when the scene is close to the robot)."""
         mujoco.mj_resetData(self.model, self.data)
         q0 = nominal_qpos(self.scene.robot, self.model)
         self.data.qpos[:NQ_ROBOT] = q0[:NQ_ROBOT]
@@ -124,6 +132,39 @@ class MujocoBackend:
         self.data.qpos[1] = base_xy[1]
         self.data.qpos[3:7] = [math.cos(base_yaw / 2), 0.0, 0.0, math.sin(base_yaw / 2)]
         mujoco.mj_forward(self.model, self.data)
+        if hands_in_trunk is not None:
+            self._pose_arms(hands_in_trunk, base_yaw)
+
+    def _pose_arms(self, hands_in_trunk: tuple[tuple[float, float, float], ...], yaw: float) -> None:
+        """Damped Gauss-Newton on each arm's joints (3 or more) until its hand site is within
+        0.1 mm of the target, within the joints' ranges. Converges in a few iterations from the
+        nominal arm pose for targets inside the arm's reach; an unreachable target leaves the
+        closest pose found."""
+        m, d = self.model, self.data
+        desc = self.scene.robot
+        qadr = joint_qpos_indices(desc, m)
+        vadr = joint_qvel_indices(desc, m)
+        trunk = d.xpos[self._trunk_body_id].copy()
+        c, s = math.cos(yaw), math.sin(yaw)
+        jac = np.zeros((3, m.nv))
+        for hand, target in enumerate(hands_in_trunk):
+            site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, desc.hand_frames[hand])
+            joints = desc.arm_joint_indices[hand]
+            goal = trunk + np.array(
+                [c * target[0] - s * target[1], s * target[0] + c * target[1], target[2]]
+            )
+            for _ in range(50):
+                err = goal - d.site_xpos[site]
+                if float(np.linalg.norm(err)) < 1e-4:
+                    break
+                mujoco.mj_jacSite(m, d, jac, None, site)
+                J = jac[:, vadr[joints]]
+                dq = J.T @ np.linalg.solve(J @ J.T + 1e-4 * np.eye(3), err)
+                for j, step in zip(joints, dq, strict=True):
+                    jid = m.dof_jntid[vadr[j]]
+                    lo, hi = m.jnt_range[jid]
+                    d.qpos[qadr[j]] = min(max(d.qpos[qadr[j]] + step, lo), hi)
+                mujoco.mj_forward(m, d)
 
     def step(self, tau: FloatArray) -> None:
         """Apply `tau` (16,) through the torque actuators (the plant clips to ctrlrange)."""

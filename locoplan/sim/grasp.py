@@ -12,6 +12,22 @@ planned release instant (drop or throw) the welds are switched off. If the hands
 there by GRASP_WINDOW after the planned lift-off, the grasp fails (an event, and the object
 stays where it is), which the metrics turn into a failed pick.
 
+Palms. The point connections leave a box free to turn about the line through the two hands
+(the grip axis), and nothing in them damps it: carried boxes swung 20-60 deg in loaded turns and
+walks, and their swing shook the robot. Real hands press the box between two palms, whose
+contact patches transmit a torsional friction torque about that axis. `GraspManager.palm_torques`
+models it: while two hands hold an object, a rotational spring-damper about the grip axis keeps
+the object at the orientation it had relative to the hands (forearm bodies) at the grasp,
+(the robot's wrists, which HECTOR's 3-DoF arms lack, would keep a held box's attitude; the bond
+keeps it relative to the trunk, so a box picked level stays level whatever the elbows do),
+critically damped at PALM_BOND_FREQUENCY for the object's own inertia about the axis, and
+capped at the palms' friction limit (4/3) m g r_palm: each palm squeezes with N = m g / mu, twice
+what holding the weight by friction needs, and a uniformly pressed disc of radius r_palm
+transmits (2/3) mu N r_palm. The cap exceeds the largest gravity torque of a held box (gripped
+at most GRASP_ABOVE_CENTRE = 0.04 m off its centre) for any mass, so a held box hangs level and
+swings only as far as an inertial torque beyond the cap pushes it. The reaction goes to the
+two hand bodies in equal halves, so momentum is conserved.
+
 Conveyor. A belt moving at `speed` along the conveyor's own x axis drags objects resting on it
 by friction: a horizontal force c m (v_belt - v_object), clamped to mu m g, while the object
 touches the conveyor's top (a simple model of a belt).
@@ -36,6 +52,9 @@ GRASP_EARLY = 0.05  # s before the planned grasp instant the hands may close
 GRASP_WINDOW = 0.25  # s after the planned lift-off the grasp may still close
 BELT_GAIN = 20.0  # 1/s: how fast the belt's friction brings an object to belt speed
 BELT_MU = 0.8  # belt friction coefficient for the drag clamp
+PALM_RADIUS = 0.04  # m, radius of the palm contact patch (an 8 cm wide hand)
+PALM_BOND_FREQUENCY = 20.0  # rad/s, natural frequency of the palm bond (critically damped)
+GRAVITY = 9.81
 
 
 @dataclass(slots=True)
@@ -71,6 +90,57 @@ class GraspManager:
             for s in scene.robot.hand_frames
         ]
 
+        self._palm_refs: dict[str, FloatArray] = {}
+        self._trunk_body = mujoco.mj_name2id(
+            scene.model, mujoco.mjtObj.mjOBJ_BODY, scene.robot.trunk_body
+        )
+        self._palm_bodies: set[int] = set()
+
+    def palm_torques(self, data: mujoco.MjData) -> None:
+        """Set the palm-bond torques (module docstring) in `data.xfrc_applied` for every object
+        held by two hands; clear them on the hand bodies once nothing is held."""
+        m = self.scene.model
+        for bid in self._palm_bodies:
+            data.xfrc_applied[bid, 3:6] = 0.0
+        self._palm_bodies.clear()
+        for hs in self.holds:
+            if hs.state != "grasped" or len(hs.hands) != 2:
+                continue
+            name = hs.hold.object
+            refs = self._palm_refs.get(name)
+            if refs is None:
+                continue
+            ob = self.scene.object_body_ids[name]
+            hands = [self.scene.hand_body_ids[k] for k in hs.hands]
+            p0 = data.site_xpos[self._hand_sites[hs.hands[0]]]
+            p1 = data.site_xpos[self._hand_sites[hs.hands[1]]]
+            axis = p0 - p1
+            n = float(np.linalg.norm(axis))
+            if n < 1e-6:
+                continue
+            axis /= n
+            R_obj = data.xmat[ob].reshape(3, 3)
+            tb = self._trunk_body
+            R_des = data.xmat[tb].reshape(3, 3) @ refs
+            quat = np.zeros(4)
+            mujoco.mju_mat2Quat(quat, (R_obj @ R_des.T).reshape(9))
+            err = np.zeros(3)
+            mujoco.mju_quat2Vel(err, quat, 1.0)
+            angle = float(err @ axis)
+            rate = float((data.cvel[ob, 0:3] - data.cvel[tb, 0:3]) @ axis)
+            # The object's inertia about the grip axis (principal inertia in the body frame).
+            R_i = data.ximat[ob].reshape(3, 3)
+            inertia = float(np.sum(m.body_inertia[ob] * (R_i.T @ axis) ** 2))
+            w = PALM_BOND_FREQUENCY
+            torque = -(inertia * w * w * angle + 2.0 * inertia * w * rate)
+            cap = (4.0 / 3.0) * float(m.body_mass[ob]) * GRAVITY * PALM_RADIUS
+            torque = min(max(torque, -cap), cap)
+            data.xfrc_applied[ob, 3:6] = torque * axis
+            for hb in hands:
+                data.xfrc_applied[hb, 3:6] -= 0.5 * torque * axis
+                self._palm_bodies.add(hb)
+            self._palm_bodies.add(ob)
+
     def held_objects(self) -> set[str]:
         """Objects currently welded to a hand."""
         return {h.hold.object for h in self.holds if h.state == "grasped"}
@@ -89,6 +159,9 @@ class GraspManager:
                 if max(gaps) <= GRASP_TOLERANCE:
                     for k in hs.hands:
                         self._close(name, k, data)
+                    R_obj = data.xmat[self.scene.object_body_ids[name]].reshape(3, 3)
+                    R_trunk = data.xmat[self._trunk_body].reshape(3, 3)
+                    self._palm_refs[name] = R_trunk.T @ R_obj
                     hs.state = "grasped"
                     hs.grasp_time = t
                     events.append(("grasp", {"object": name, "gap_m": round(max(gaps), 4)}))

@@ -26,6 +26,7 @@ from locoplan.control.controller import (
 from locoplan.exceptions import SimulationError, SolverFailure
 from locoplan.log.writer import RunLogWriter
 from locoplan.plan import Plan
+from locoplan.plan.hand_paths import default_waypoint
 from locoplan.render.samples import RenderSample, TaskTimeline
 from locoplan.render.view_log import ViewLogger, sample_from_data
 from locoplan.robot.description import RobotDescription
@@ -160,7 +161,12 @@ class ClosedLoop:
         self.desc = desc
         self.plan = plan
         self.backend = MujocoBackend(scene)
-        self.backend.reset(start_xy, start_yaw)
+        tracks = plan.manipulation.tracks
+        # Arms start in the nominal keyframe unless the plan starts a hand elsewhere (tucked).
+        moved = any(tr.initial != default_waypoint(i) for i, tr in enumerate(tracks))
+        self.backend.reset(
+            start_xy, start_yaw, tuple(tr.initial.point for tr in tracks) if moved else None
+        )
         # The controller runs every `control_decimation` physics steps and its torques are
         # held in between (a zero-order hold, as on a real robot's control bus).
         self.control_decimation = max(1, round(control_period / self.backend.dt))
@@ -357,6 +363,7 @@ class ClosedLoop:
                                 rec.grasp_failures[str(fields["object"])] = float(fields["gap_m"])  # type: ignore[arg-type]
                             if log is not None:
                                 log.event(t, kind, **fields)
+                        grasp.palm_torques(d)
                     if self.conveyor.belts:
                         self.conveyor.apply(d, grasp.held_objects())
                     if self.pushes:
