@@ -135,7 +135,9 @@ class MujocoBackend:
         if hands_in_trunk is not None:
             self._pose_arms(hands_in_trunk, base_yaw)
 
-    def _pose_arms(self, hands_in_trunk: tuple[tuple[float, float, float], ...], yaw: float) -> None:
+    def _pose_arms(
+        self, hands_in_trunk: tuple[tuple[float, float, float], ...], yaw: float
+    ) -> None:
         """Damped Gauss-Newton on each arm's joints (3 or more) until its hand site is within
         0.1 mm of the target, within the joints' ranges. Converges in a few iterations from the
         nominal arm pose for targets inside the arm's reach; an unreachable target leaves the
