@@ -151,7 +151,8 @@ def test_every_script_is_valid_and_written_as_the_brief_asks() -> None:
         assert s.end == pytest.approx(max(ends) + 1.0, abs=EPS), s.name
         for t in s.tasks:
             assert on_grid(t.start, 0.01) and on_grid(t.duration, 0.01), s.name
-        for spec in [*s.objects.values(), *s.fixtures.values()]:
+        specs: list[ObjectSpec | FixtureSpec] = [*s.objects.values(), *s.fixtures.values()]
+        for spec in specs:
             assert all(on_grid(x, 0.001) for x in [*spec.position, *spec.size]), s.name
         for obj, fixture in (s.expect.placed or {}).items():
             drops = [t for t in tasks_of(s, DropTask) if t.object == obj]
