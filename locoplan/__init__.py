@@ -14,4 +14,10 @@ import os as _os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     _os.environ.setdefault(_var, "1")
 
+# Numba caches the compiled kernels next to the sources, or in a per-user folder when the
+# installed package is read-only (`locoplan._numba_cache`); decided before numba is imported.
+from locoplan import _numba_cache  # noqa: E402
+
+_numba_cache.configure()
+
 __version__ = "0.1.0"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import mujoco
@@ -102,6 +103,33 @@ def test_lookup_by_path_dir_and_env(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     assert load_robot_description("mybot").name == "hector"
     with pytest.raises(RobotDescriptionError, match="no robot description"):
         load_robot_description("hector")
+
+
+def test_robots_dir_installed_package_before_checkout(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import locoplan
+
+    monkeypatch.delenv(ROBOTS_DIR_ENV, raising=False)
+    package = tmp_path / "site-packages" / "locoplan"
+    package.mkdir(parents=True)
+    monkeypatch.setattr(locoplan, "__file__", str(package / "__init__.py"))
+    # Neither layout present: the error names where an installed package keeps its robots.
+    assert robots_dir() == package / "_data" / "robots"
+    with pytest.raises(RobotDescriptionError, match="_data/robots"):
+        load_robot_description("hector")
+    # A checkout: robots/ beside the package.
+    (package.parent / "robots").mkdir()
+    assert robots_dir() == package.parent / "robots"
+    # An installed wheel: the package data wins over a stray site-packages/robots.
+    shutil.copytree(HECTOR_DIR, package / "_data" / "robots" / "hector")
+    assert robots_dir() == package / "_data" / "robots"
+    assert load_robot_description("hector").mjcf_path == (
+        package / "_data" / "robots" / "hector" / "hector.xml"
+    )
+    # $LOCOPLAN_ROBOTS_DIR beats both.
+    monkeypatch.setenv(ROBOTS_DIR_ENV, str(tmp_path / "mine"))
+    assert robots_dir() == tmp_path / "mine"
 
 
 def _raw() -> dict:

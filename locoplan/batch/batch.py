@@ -57,14 +57,18 @@ def prepare_batch(
     out_dir: Path,
     options: RunOptions | None = None,
     use_cache: bool = True,
+    max_sim_time: float | None = None,
 ) -> list[BatchCase]:
     """Find the scripts under `paths` and validate each (no simulation).
 
     Each valid script becomes a job whose MCAP goes to `out_dir`, mirroring the scripts'
-    folders below the folder holding them all (`out_dir/<sub>/<stem>.mcap`). Raises
-    BatchInputError when a path does not exist or no script is found.
+    folders below the folder holding them all (`out_dir/<sub>/<stem>.mcap`). With
+    `max_sim_time` (s), a script asking for more simulated time is invalid
+    (`locoplan.scenario.limits`). Raises BatchInputError when a path does not exist or no
+    script is found.
     """
     from locoplan.scenario import load_scenario_file
+    from locoplan.scenario.limits import sim_time_issue
 
     options = options or RunOptions()
     files = discover_scripts(paths)
@@ -80,6 +84,11 @@ def prepare_batch(
             loaded = load_scenario_file(path)
         except ScenarioError as exc:
             invalid = Outcome(case_id, "error", message=str(exc.issues[0]), detail=str(exc))
+            cases.append(BatchCase(case_id, path, classname, None, invalid))
+            continue
+        too_long = None if max_sim_time is None else sim_time_issue(loaded, max_sim_time)
+        if too_long is not None:
+            invalid = Outcome(case_id, "error", message=str(too_long), detail=str(too_long))
             cases.append(BatchCase(case_id, path, classname, None, invalid))
             continue
         run_dir = out_dir / rel_folder
@@ -149,9 +158,17 @@ def run_batch(
     cache_dir: Path | None = None,
     listener: RunListener | None = None,
     fail_fast: bool = False,
+    backend: str = "local",
+    address: str | None = None,
 ) -> list[BatchResult]:
     """Run the valid cases (at most `workers` at a time, each bounded by `timeout` seconds)
     and return every case's result in the order of `cases`.
+
+    `backend` "local" runs them in worker processes here (`pool.run_local`), "ray" as Ray
+    tasks (`ray_backend.run_ray`) on the cluster at `address`, or on a local Ray started for
+    the call when `address` is None; validation, the cache, the metrics JSON and the results
+    are the same on both. Raises BackendUnavailable when Ray is missing or unreachable,
+    ValueError for an unknown backend.
 
     Invalid cases are `error` results without running. With `cache_dir`, a case whose cache
     key has a stored outcome is served from it (`cached=True`, its log left as it was) and
@@ -185,9 +202,28 @@ def run_batch(
             outcomes[job.job_id] = skipped
             forward.finished(skipped)
     elif to_run:
-        for outcome in run_local(to_run, workers, timeout, forward, fail_fast):
+        for outcome in _run_jobs(to_run, backend, workers, address, timeout, forward, fail_fast):
             outcomes[outcome.job_id] = outcome
     return [BatchResult(case, outcomes[case.case_id]) for case in cases]
+
+
+def _run_jobs(
+    jobs: Sequence[Job],
+    backend: str,
+    workers: int | None,
+    address: str | None,
+    timeout: float | None,
+    listener: RunListener,
+    fail_fast: bool,
+) -> list[Outcome]:
+    if backend == "local":
+        return run_local(jobs, workers, timeout, listener, fail_fast)
+    if backend == "ray":
+        from locoplan.batch.ray_backend import run_ray, workers_for
+
+        n = workers_for(len(jobs), workers, address)
+        return run_ray(jobs, n, address, timeout, listener, fail_fast)
+    raise ValueError(f"unknown backend '{backend}'; allowed: local, ray")
 
 
 def batch_exit_code(results: Sequence[BatchResult]) -> int:

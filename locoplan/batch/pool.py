@@ -23,6 +23,7 @@ from multiprocessing.connection import Connection, wait
 from multiprocessing.context import BaseContext
 from typing import Any
 
+from locoplan import interrupt
 from locoplan.batch.job import Job, Outcome, RunListener
 from locoplan.batch.worker import execute_job
 
@@ -55,10 +56,10 @@ def _context() -> BaseContext:
 
 def _child_main(job: Job, conn: Connection) -> None:
     """Entry point of a worker process: run `job`, send progress and the outcome."""
-    from locoplan.log.termination import install_termination_handlers
-
-    # SIGTERM (a timeout, the parent stopping) unwinds the stack so the MCAP gets closed.
-    install_termination_handlers()
+    # SIGTERM (a timeout, the parent stopping, a user) or SIGINT (Ctrl-C reaches the whole
+    # process group) stops the run at its next control tick: the MCAP is closed whole and the
+    # process exits with 128 + signal, without a traceback.
+    interrupt.install_for_worker()
     last = 0.0
 
     def progress(t: float, total: float) -> None:
@@ -98,7 +99,33 @@ def _describe_death(exitcode: int | None) -> str:
             return f"worker died (killed by {signal.Signals(-exitcode).name})"
         except ValueError:
             return f"worker died (killed by signal {-exitcode})"
+    if exitcode in (130, 143):  # a worker stopped by SIGINT / SIGTERM (not from us)
+        return f"worker stopped by {interrupt.signal_name(exitcode - 128)} (log closed)"
     return f"worker died (exit status {exitcode})"
+
+
+def _stop_all(processes: Sequence[Any], grace: float = TERMINATE_GRACE) -> None:
+    """`_stop` for several workers at once: SIGTERM to all, then the same grace for all."""
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    deadline = time.monotonic() + grace
+    for process in processes:
+        process.join(max(0.0, deadline - time.monotonic()))
+    for process in processes:
+        if process.is_alive():
+            process.kill()
+            process.join()
+
+
+def _interrupted_outcome(run: _Running, signum: int) -> Outcome:
+    log = run.job.options.out_dir / f"{run.job.options.log_name or run.job.name}.mcap"
+    message = (
+        f"interrupted ({interrupt.signal_name(signum)}) at t={run.sim_time:.2f} s simulated;"
+        f" log up to there: {log}"
+    )
+    return Outcome(run.job.job_id, "skipped", message=message,
+                   wall_time=time.monotonic() - run.started)  # fmt: skip
 
 
 def _stop(process: Any, grace: float = TERMINATE_GRACE) -> None:
@@ -124,7 +151,11 @@ def run_local(
     A job whose worker runs longer than `timeout` seconds (None: no limit) is stopped and
     becomes an `error`, as does one whose worker dies. With `fail_fast`, the first job that
     does not pass stops the others: running ones are stopped and, like those not started,
-    reported as `skipped`. KeyboardInterrupt stops every worker, then propagates.
+    reported as `skipped`. A SIGINT / SIGTERM deferred by `locoplan.interrupt` (the CLI
+    installs its handlers) stops every worker the same way, each closing its log: the
+    running jobs and those not started are `skipped` ("interrupted ..."), and the outcomes
+    are returned (`locoplan.interrupt.pending()` tells the caller). KeyboardInterrupt (no
+    handlers installed) stops every worker, then propagates.
     """
     if workers is not None and workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
@@ -148,45 +179,59 @@ def run_local(
             stopping = True
 
     try:
-        while pending or running:
-            while pending and len(running) < n_workers and not stopping:
-                job = pending.popleft()
-                receiver, sender = ctx.Pipe(duplex=False)
-                process = ctx.Process(  # type: ignore[attr-defined]
-                    target=_child_main,
-                    args=(job, sender),
-                    name=f"locoplan-worker {job.job_id}",
-                    daemon=True,
-                )
-                process.start()
-                sender.close()  # the child holds the only writer: EOF means it is gone
-                running.append(_Running(job, process, receiver, time.monotonic()))
-                if listener is not None:
-                    listener.started(job)
-            if stopping:
+        with interrupt.deferring():
+            while pending or running:
+                while pending and len(running) < n_workers and not stopping:
+                    job = pending.popleft()
+                    receiver, sender = ctx.Pipe(duplex=False)
+                    process = ctx.Process(  # type: ignore[attr-defined]
+                        target=_child_main,
+                        args=(job, sender),
+                        name=f"locoplan-worker {job.job_id}",
+                        daemon=True,
+                    )
+                    process.start()
+                    sender.close()  # the child holds the only writer: EOF means it is gone
+                    running.append(_Running(job, process, receiver, time.monotonic()))
+                    if listener is not None:
+                        listener.started(job)
+                signum = interrupt.pending()
+                if signum:
+                    # Every worker stops at its next control tick (its log closed whole).
+                    _stop_all([run.process for run in running])
+                    for run in running:
+                        _drain(run, listener)  # an outcome sent just before the signal
+                        run.conn.close()
+                        finish(run.outcome or _interrupted_outcome(run, signum))
+                    running.clear()
+                    why = f"not run (interrupted, {interrupt.signal_name(signum)})"
+                    for job in pending:
+                        finish(Outcome(job.job_id, "skipped", message=why))
+                    pending.clear()
+                    break
+                if stopping:
+                    for run in running:
+                        _stop(run.process)
+                        run.conn.close()
+                        finish(Outcome(run.job.job_id, "skipped", message="stopped (--fail-fast)"))
+                    running.clear()
+                    for job in pending:
+                        finish(Outcome(job.job_id, "skipped", message="not run (--fail-fast)"))
+                    pending.clear()
+                    break
+                waitables: list[Any] = [r.conn for r in running if not r.closed]
+                waitables += [r.process.sentinel for r in running]
+                wait(waitables, timeout=POLL_INTERVAL)
+                still: list[_Running] = []
                 for run in running:
-                    _stop(run.process)
-                    run.conn.close()
-                    finish(Outcome(run.job.job_id, "skipped", message="stopped (--fail-fast)"))
-                running.clear()
-                for job in pending:
-                    finish(Outcome(job.job_id, "skipped", message="not run (--fail-fast)"))
-                pending.clear()
-                break
-            waitables: list[Any] = [r.conn for r in running if not r.closed]
-            waitables += [r.process.sentinel for r in running]
-            wait(waitables, timeout=POLL_INTERVAL)
-            still: list[_Running] = []
-            for run in running:
-                done = _poll(run, listener, timeout)
-                if done is None:
-                    still.append(run)
-                else:
-                    finish(done)
-            running = still
+                    done = _poll(run, listener, timeout)
+                    if done is None:
+                        still.append(run)
+                    else:
+                        finish(done)
+                running = still
     except BaseException:
-        for run in running:
-            _stop(run.process, grace=1.0)
+        _stop_all([run.process for run in running], grace=1.0)
         raise
     return [outcomes[job.job_id] for job in jobs]
 

@@ -3,7 +3,8 @@
 Test hooks (for the isolation tests, documented in docs/ci.md): when the environment variable
 `LOCOPLAN_TEST_CRASH` equals a job's scenario name (or its job id), the worker running it
 dies at once with `os._exit(1)`, as a segfaulting solver would; `LOCOPLAN_TEST_HANG` makes it
-sleep forever, as a deadlocked one would. They are read only here, in the worker.
+sleep until it is stopped (a SIGTERM from the pool's timeout, a SIGINT), as a hung one would.
+They are read only here, in the worker.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import traceback
 from collections.abc import Callable
 from dataclasses import replace
 
+from locoplan import interrupt
 from locoplan.batch.job import Job, Outcome, Status
 from locoplan.exceptions import ScenarioError, SimulationError, SolverFailure
 from locoplan.plan import PlanError
@@ -30,13 +32,15 @@ def _test_hooks(job: Job) -> None:
         os._exit(1)
     if os.environ.get(HANG_ENV) in names:
         while True:
-            time.sleep(3600)
+            time.sleep(0.05)
+            interrupt.check()  # a signal the worker defers (locoplan.interrupt) ends it
 
 
 def execute_job(job: Job, progress: Progress | None = None) -> Outcome:
     """Run `job` in this process and return how it ended; never raises for a bad script or
     a broken run (those are `error` outcomes). `progress(t, total)` receives simulated time
-    (s). KeyboardInterrupt and SystemExit propagate (the MCAP is closed on the way out)."""
+    (s). KeyboardInterrupt and SystemExit propagate (the MCAP is closed on the way out), as
+    does `locoplan.interrupt.Interrupted` for a signal the worker deferred."""
     from locoplan.scenario import load_scenario_file
     from locoplan.sim.run import run_scenario
 

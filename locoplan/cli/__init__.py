@@ -23,6 +23,7 @@ from locoplan.cli import run  # noqa: F401
 from locoplan.cli import batch  # noqa: F401  (batch, sweep)
 from locoplan.cli import compare  # noqa: F401
 from locoplan.cli import view  # noqa: F401  (render, inspect)
+from locoplan.cli import examples  # noqa: F401
 
 # isort: on
 from locoplan.cli.common import (

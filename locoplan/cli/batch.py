@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import typer
 from rich.console import Console
 
 from locoplan.cli.common import (
     EXIT_BAD_INPUT,
-    EXIT_INTERRUPTED,
+    MAX_SIM_TIME,
     _fail,
+    _interrupted,
     _load_with_text_or_exit,
     app,
     err,
@@ -37,6 +40,23 @@ _BATCH_TIMEOUT = typer.Option(
     min=0.0,
     help="Stop a run whose worker takes longer than S seconds (wall time) and count it as "
     "an error; 0 for no limit.",
+)
+
+_BACKEND = typer.Option(
+    "local",
+    "--backend",
+    metavar="local|ray",
+    help="local: worker processes on this machine; ray: Ray tasks, on a cluster or a local "
+    "Ray (pip install 'locoplan\\[ray]').",
+)
+_ADDRESS = typer.Option(
+    None,
+    "--address",
+    metavar="A",
+    help="Ray cluster to use (ray://HOST:10001, HOST:6379 as printed by 'ray start --head', "
+    "or 'auto' for the one running here); default: a local Ray started for this command "
+    "with --jobs CPUs, stopped after.",
+    show_default=False,
 )
 
 _SWEEP_SETS = typer.Option(
@@ -128,6 +148,39 @@ def _print_table(table: object) -> None:
         Console(file=out.file, width=160, highlight=False, soft_wrap=True).print(table)
 
 
+def _exit_if_interrupted(results: list[Any], out_dir: object) -> None:
+    """After a batch or sweep whose workers a signal stopped (the summary printed): exit
+    130 / 143 saying how many runs finished."""
+    from locoplan import interrupt
+
+    signum = interrupt.pending()
+    if not signum:
+        return
+    statuses = [getattr(getattr(r, "outcome", r), "status", "") for r in results]
+    done = sum(s in ("passed", "failed", "error") for s in statuses)
+    _interrupted(
+        interrupt.Interrupted(signum),
+        f"{done} of {len(statuses)} runs finished; the logs so far are in {out_dir}",
+    )
+
+
+def _check_backend(backend: str, address: str | None) -> None:
+    """Exit 2 (nothing run) for an unknown --backend, --address without Ray, or Ray missing."""
+    from locoplan.batch import BACKENDS, BackendUnavailable
+
+    if backend not in BACKENDS:
+        _fail(EXIT_BAD_INPUT, f"unknown --backend '{backend}'; allowed: {', '.join(BACKENDS)}")
+    if address is not None and backend != "ray":
+        _fail(EXIT_BAD_INPUT, "--address needs --backend ray")
+    if backend == "ray":
+        from locoplan.batch.ray_backend import import_ray
+
+        try:
+            import_ray()
+        except BackendUnavailable as exc:
+            _fail(EXIT_BAD_INPUT, str(exc))
+
+
 @app.command("batch")
 def batch_command(
     paths: list[str] = _BATCH_PATHS,
@@ -155,6 +208,7 @@ def batch_command(
         False, "--no-cache", help="Run every script, even those with a cached result."
     ),
     debug: bool = typer.Option(False, "--debug", help="Show Python tracebacks of failures."),
+    max_sim_time: float = MAX_SIM_TIME,
 ) -> None:
     """Validate and run many task scripts in parallel (CI).
 
@@ -174,7 +228,9 @@ def batch_command(
 
     Exit status: 0 every script passed, 1 any failed or errored, 2 a bad
     command line (no scripts found, a missing path, a bad option),
-    130 interrupted.
+    130 interrupted (Ctrl-C), 143 terminated (SIGTERM): the running scripts
+    stop at their next control tick (logs closed), the summary shows what
+    finished.
 
     Examples:
 
@@ -187,6 +243,7 @@ def batch_command(
     import time
     from pathlib import Path
 
+    from locoplan import interrupt
     from locoplan.batch import (
         CACHE_DIRNAME,
         BatchInputError,
@@ -196,15 +253,13 @@ def batch_command(
         run_batch,
         write_junit,
     )
-    from locoplan.log.termination import install_termination_handlers
     from locoplan.report.batch_table import batch_table
 
     out_path = Path(out_dir)
     try:
-        cases = prepare_batch(paths, out_path, use_cache=not no_cache)
+        cases = prepare_batch(paths, out_path, use_cache=not no_cache, max_sim_time=max_sim_time)
     except BatchInputError as exc:
         _fail(EXIT_BAD_INPUT, str(exc))
-    restore = install_termination_handlers()
     started = time.perf_counter()
     try:
         with _LiveProgress(len(cases), "batch") as progress:
@@ -217,15 +272,14 @@ def batch_command(
                 fail_fast=fail_fast,
             )
     except (KeyboardInterrupt, SystemExit) as exc:
-        if debug or (isinstance(exc, SystemExit) and exc.code in (0, None)):
+        if debug or interrupt.interruption(exc) is None:
             raise
-        _fail(EXIT_INTERRUPTED, f"interrupted; the logs written so far are in {out_dir}")
-    finally:
-        restore()
+        _interrupted(exc, f"the logs written so far are in {out_dir}")
     _print_table(batch_table(results))
     workers = jobs or default_workers()
     elapsed = time.perf_counter() - started
     err.print(f"{len(results)} scripts in {elapsed:.1f} s on {workers} workers", markup=False)
+    _exit_if_interrupted(results, out_dir)
     if junit is not None:
         try:
             write_junit(results, Path(junit))
@@ -240,20 +294,8 @@ def sweep_command(
     file: str = typer.Argument(..., metavar="FILE", help="The task script to sweep (YAML)."),
     sets: list[str] = _SWEEP_SETS,
     jobs: int | None = _BATCH_JOBS,
-    backend: str = typer.Option(
-        "local",
-        "--backend",
-        metavar="local|ray",
-        help="local: worker processes on this machine; ray: Ray tasks (pip install "
-        "'locoplan\\[ray]').",
-    ),
-    address: str | None = typer.Option(
-        None,
-        "--address",
-        metavar="A",
-        help="Ray cluster to use (as printed by 'ray start --head'; 'auto' finds a local "
-        "one); default: a local Ray started for this sweep with --jobs CPUs.",
-    ),
+    backend: str = _BACKEND,
+    address: str | None = _ADDRESS,
     out_dir: str | None = typer.Option(
         None,
         "--out",
@@ -271,6 +313,7 @@ def sweep_command(
     ),
     timeout: float = _BATCH_TIMEOUT,
     debug: bool = typer.Option(False, "--debug", help="Show Python tracebacks of failures."),
+    max_sim_time: float = MAX_SIM_TIME,
 ) -> None:
     """Run a task script over a grid of parameter values (payload, timing).
 
@@ -287,7 +330,9 @@ def sweep_command(
 
     Exit status: 0 every point passed, 1 some point failed, errored or was
     invalid, 2 a bad command line (bad --set, list index out of range, no
-    valid point, Ray missing), 130 interrupted.
+    valid point, Ray missing), 130 interrupted (Ctrl-C), 143 terminated
+    (SIGTERM): running points stop at their next control tick, the table,
+    CSV and plot show what finished.
 
     Examples:
 
@@ -301,8 +346,8 @@ def sweep_command(
     """
     from pathlib import Path
 
+    from locoplan import interrupt
     from locoplan.batch import (
-        BACKENDS,
         PLOTTABLE,
         BackendUnavailable,
         SweepSpecError,
@@ -314,29 +359,18 @@ def sweep_command(
         sweep_jobs,
         sweep_rows,
     )
-    from locoplan.log.termination import install_termination_handlers
     from locoplan.report.batch_table import sweep_table
     from locoplan.report.sweep_plot import plot_sweep
     from locoplan.scenario.model import Scenario
 
-    if backend not in BACKENDS:
-        _fail(EXIT_BAD_INPUT, f"unknown --backend '{backend}'; allowed: {', '.join(BACKENDS)}")
+    _check_backend(backend, address)
     if metric not in PLOTTABLE:
         _fail(EXIT_BAD_INPUT, f"unknown --metric '{metric}'; allowed: {', '.join(PLOTTABLE)}")
-    if address is not None and backend != "ray":
-        _fail(EXIT_BAD_INPUT, "--address needs --backend ray")
-    if backend == "ray":
-        from locoplan.batch.ray_backend import import_ray
-
-        try:
-            import_ray()
-        except BackendUnavailable as exc:
-            _fail(EXIT_BAD_INPUT, str(exc))
     try:
         axes = [parse_set(spec) for spec in sets]
     except SweepSpecError as exc:
         _fail(EXIT_BAD_INPUT, str(exc))
-    scenario, text = _load_with_text_or_exit(file)
+    scenario, text = _load_with_text_or_exit(file, max_sim_time)
     assert isinstance(scenario, Scenario)
     try:
         points = build_points(file, text, axes)
@@ -349,18 +383,15 @@ def sweep_command(
     job_list = sweep_jobs(points, axes, scenario.name, file, out_path)
     if not job_list:
         _fail(EXIT_BAD_INPUT, f"no valid point among {len(points)}; nothing run")
-    restore = install_termination_handlers()
     try:
         with _LiveProgress(len(job_list), f"sweep ({backend})") as progress:
             outcomes = run_sweep(job_list, backend, jobs, address, timeout or None, progress)
     except BackendUnavailable as exc:
         _fail(EXIT_BAD_INPUT, str(exc))
     except (KeyboardInterrupt, SystemExit) as exc:
-        if debug or (isinstance(exc, SystemExit) and exc.code in (0, None)):
+        if debug or interrupt.interruption(exc) is None:
             raise
-        _fail(EXIT_INTERRUPTED, f"interrupted; the logs written so far are in {out_path}")
-    finally:
-        restore()
+        _interrupted(exc, f"the logs written so far are in {out_path}")
     rows = sweep_rows(axes, points, outcomes)
     _print_table(sweep_table(axes, rows, metric))
     csv_path = out_path / f"{scenario.name}-sweep.csv"
@@ -372,4 +403,5 @@ def sweep_command(
     except OSError as exc:
         _fail(EXIT_BAD_INPUT, f"cannot write to {out_path}: {exc.strerror or exc}")
     err.print(f"wrote {csv_path}\nwrote {png_path}", markup=False, emoji=False, highlight=False)
+    _exit_if_interrupted(list(outcomes.values()), out_path)
     raise typer.Exit(sweep_exit_code(points, outcomes))

@@ -1,13 +1,19 @@
 """Shared by every command: the typer `app`, the consoles, exit codes and small helpers.
 
 Exit codes (shared/cli-contract.md): 0 ok, 1 expectation failed, 2 bad input,
-3 the run broke (solver failure, simulator instability), 130 interrupted.
+3 the run broke (solver failure, simulator instability), 130 interrupted (SIGINT),
+143 terminated (SIGTERM).
+
+Signals: every command runs with `locoplan.interrupt`'s handlers (installed by the root
+callback): SIGINT / SIGTERM stop it with `Interrupted` at once, except inside the commands'
+`deferring()` blocks (simulations, batch parents), where they only set a flag the work checks
+between control ticks.
 """
 
 from __future__ import annotations
 
 import sys
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import typer
 from rich.console import Console
@@ -20,6 +26,7 @@ EXIT_EXPECTATION = 1
 EXIT_BAD_INPUT = 2
 EXIT_RUN_BROKE = 3
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143  # SIGTERM (128 + 15, the shell's convention)
 
 app = typer.Typer(
     name="locoplan",
@@ -65,17 +72,52 @@ def _fail(code: int, message: str) -> NoReturn:
 
 @app.callback(invoke_without_command=True)
 def _root(
+    ctx: typer.Context,
     version: bool = typer.Option(False, "--version", help="Print the version and exit."),
 ) -> None:
+    import threading
+
+    from locoplan import interrupt
+
+    if threading.current_thread() is threading.main_thread():
+        ctx.call_on_close(interrupt.install(announce=True))
     if version:
         out.print(f"locoplan {__version__}")
         raise typer.Exit(EXIT_OK)
 
 
-def _load_with_text_or_exit(name: str) -> tuple[object, str]:
-    """Load a task script and its text; on bad input print every issue and exit 2."""
+def _max_sim_time_option() -> Any:
+    from locoplan.scenario.limits import DEFAULT_MAX_SIM_TIME
+
+    return typer.Option(
+        DEFAULT_MAX_SIM_TIME,
+        "--max-sim-time",
+        metavar="SECONDS",
+        min=0.0,
+        help="Refuse (exit 2) a script whose simulation would end later than this; the "
+        "message estimates the wall time it would take.",
+    )
+
+
+MAX_SIM_TIME = _max_sim_time_option()
+
+
+def _interrupted(exc: BaseException, message: str) -> NoReturn:
+    """Exit 130 (SIGINT, Ctrl-C) or 143 (SIGTERM) for an interruption, saying `message`
+    after what stopped the command."""
+    from locoplan import interrupt
+
+    code = interrupt.interruption(exc) or EXIT_INTERRUPTED
+    what = "terminated (SIGTERM)" if code == EXIT_TERMINATED else "interrupted"
+    _fail(code, f"{what}; {message}" if message else what)
+
+
+def _load_with_text_or_exit(name: str, max_sim_time: float | None = None) -> tuple[object, str]:
+    """Load a task script and its text; on bad input (or, with `max_sim_time`, a script
+    asking for more simulated time) print every issue and exit 2."""
     from locoplan.exceptions import ScenarioError
     from locoplan.scenario import load_scenario_file
+    from locoplan.scenario.limits import sim_time_issue
     from locoplan.scenario.source import MAX_BYTES
 
     data: bytes | str | None = None
@@ -88,6 +130,10 @@ def _load_with_text_or_exit(name: str) -> tuple[object, str]:
         for issue in exc.issues:
             err.print(str(issue), markup=False, emoji=False, highlight=False)
         raise typer.Exit(EXIT_BAD_INPUT) from None
+    too_long = None if max_sim_time is None else sim_time_issue(loaded, max_sim_time)
+    if too_long is not None:
+        err.print(str(too_long), markup=False, emoji=False, highlight=False)
+        raise typer.Exit(EXIT_BAD_INPUT)
     return loaded.scenario, loaded.text
 
 

@@ -7,10 +7,11 @@ import typer
 from locoplan.cli.common import (
     EXIT_BAD_INPUT,
     EXIT_EXPECTATION,
-    EXIT_INTERRUPTED,
     EXIT_OK,
     EXIT_RUN_BROKE,
+    MAX_SIM_TIME,
     _fail,
+    _interrupted,
     _load_with_text_or_exit,
     _sim_progress,
     app,
@@ -60,6 +61,24 @@ def compare_command(
     no_plots: bool = typer.Option(False, "--no-plots", help="Skip the PNG plots."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bars and no table."),
     debug: bool = typer.Option(False, "--debug", help="Show Python tracebacks of failures."),
+    live: bool = typer.Option(
+        False,
+        "--live",
+        help="Serve each run to Foxglove while it goes, one after the other (Foxglove "
+        "WebSocket on ws://localhost:PORT; the client reconnects for the second run).",
+    ),
+    port: int = typer.Option(
+        8765, "--port", metavar="PORT", min=0, max=65535, help="With --live: the port."
+    ),
+    pace: float | None = typer.Option(
+        None,
+        "--pace",
+        metavar="K",
+        min=0.0,
+        help="With --live: run at K times real time (default 1; 0: as fast as it goes).",
+        show_default=False,
+    ),
+    max_sim_time: float = MAX_SIM_TIME,
 ) -> None:
     """Run a task script twice and compare: quasi-static vs dynamic, or Model 1 vs 2.
 
@@ -81,7 +100,8 @@ def compare_command(
 
     Exit status: 0 every expectation held in both runs, 1 an expectation
     failed in either, 2 bad input, 3 a run broke (its partial log is kept),
-    130 interrupted.
+    130 interrupted (Ctrl-C), 143 terminated (SIGTERM): both runs stop at their
+    next control tick and keep their logs.
 
     Examples:
 
@@ -90,18 +110,20 @@ def compare_command(
       locoplan compare scenarios/model-comparison.yaml --models
 
       locoplan compare scenarios/turn.yaml --jobs 1 --quiet
+
+      locoplan compare scenarios/package-transfer.yaml --live
     """
     from pathlib import Path
 
     from rich.progress import TaskID
 
+    from locoplan import interrupt
     from locoplan.compare import (
         CompareKind,
         compare_scenario,
         comparison_variants,
         write_compare_json,
     )
-    from locoplan.log.termination import install_termination_handlers
     from locoplan.plan import STRATEGIES, PlanError
     from locoplan.report.compare_plots import plot_comparison
     from locoplan.report.compare_table import compare_table
@@ -117,15 +139,26 @@ def compare_command(
         _fail(EXIT_BAD_INPUT, f"--jobs must be at least 1, got {jobs}")
     if qp_backend not in ("daqp", "proxsuite", "piqp"):
         _fail(EXIT_BAD_INPUT, f"unknown --qp '{qp_backend}'; allowed: daqp, proxsuite, piqp")
-    scenario, text = _load_with_text_or_exit(file)
+    if pace is not None and not live:
+        _fail(EXIT_BAD_INPUT, "--pace applies with --live only")
+    scenario, text = _load_with_text_or_exit(file, max_sim_time)
     assert isinstance(scenario, Scenario)
     kind: CompareKind = "models" if models else "strategies"
     directory = Path(out_dir or f"runs/{scenario.name}-{'models' if models else 'compare'}")
     labels = [v.label for v in comparison_variants(scenario, kind, strategy)]
     show = not quiet and out.is_terminal
-    restore = install_termination_handlers()
+    live_view = None
+    if live:
+        from locoplan.sim.live import LiveView
+
+        live_view = LiveView(port, 1.0 if pace is None else pace)
+        err.print(
+            f"live view: Foxglove > Open connection > Foxglove WebSocket > ws://localhost:{port}"
+            f" ({' then '.join(labels)}; layout: docs/foxglove-layout.json)",
+            markup=False,
+        )
     try:
-        with _sim_progress(show, label_width=14) as bar:
+        with interrupt.deferring(), _sim_progress(show, label_width=14) as bar:
             bars: dict[str, TaskID] = {label: bar.add_task(label, total=1.0) for label in labels}
 
             def on_progress(label: str, t: float, total: float) -> None:
@@ -140,17 +173,19 @@ def compare_command(
                 jobs=jobs,
                 qp_backend=qp_backend,
                 progress=on_progress,
+                live=live_view,
             )
+        interrupt.check()
     except PlanError as exc:
         _fail(EXIT_BAD_INPUT, f"{file}: cannot plan: {exc}")
     except OSError as exc:
+        if live and exc.errno is None:  # the live server's port
+            _fail(EXIT_BAD_INPUT, f"--live: {exc}")
         _fail(EXIT_BAD_INPUT, f"cannot write to {directory}: {exc.strerror or exc}")
     except (KeyboardInterrupt, SystemExit) as exc:
-        if isinstance(exc, SystemExit) and exc.code in (0, None):
+        if interrupt.interruption(exc) is None:
             raise
-        _fail(EXIT_INTERRUPTED, f"interrupted; the logs up to here are in {directory}")
-    finally:
-        restore()
+        _interrupted(exc, f"the logs up to here are in {directory}")
     try:
         write_compare_json(comparison, directory / "compare.json")
         plots = () if no_plots else plot_comparison(comparison)

@@ -7,15 +7,17 @@ import typer
 from locoplan.cli.common import (
     EXIT_BAD_INPUT,
     EXIT_EXPECTATION,
-    EXIT_INTERRUPTED,
     EXIT_OK,
     EXIT_RUN_BROKE,
+    MAX_SIM_TIME,
     PREPARING,
     _check_video_option,
     _fail,
+    _interrupted,
     _load_with_text_or_exit,
     _sim_progress,
     app,
+    err,
     out,
 )
 
@@ -61,17 +63,39 @@ def run_command(
         help="Also render the run into an MP4 (headless, 30 fps; see 'locoplan render').",
         callback=lambda value: _check_video_option(value),
     ),
+    live: bool = typer.Option(
+        False,
+        "--live",
+        help="Serve the run to Foxglove while it goes (Foxglove WebSocket on "
+        "ws://localhost:PORT, the log's topics), paced by --pace; the MCAP is still written.",
+    ),
+    port: int = typer.Option(
+        8765, "--port", metavar="PORT", min=0, max=65535, help="With --live: the port."
+    ),
+    pace: float | None = typer.Option(
+        None,
+        "--pace",
+        metavar="K",
+        min=0.0,
+        help="Run at K times real time (default 1 with --live, else as fast as it goes; "
+        "0: as fast as it goes).",
+        show_default=False,
+    ),
+    max_sim_time: float = MAX_SIM_TIME,
 ) -> None:
     """Run one task script closed loop in MuJoCo (multi-contact MPC + WBC).
 
     Writes DIR/<name>.mcap (open it in Foxglove: robot, contacts, MPC forces, torques)
     and prints the metrics. Exit status: 0 every expectation held, 1 an expectation
     failed, 2 bad input, 3 the run broke (solver failure, simulator instability),
-    130 interrupted. The log written so far stays readable in every case.
+    130 interrupted (Ctrl-C, SIGINT), 143 terminated (SIGTERM). The log written so far
+    stays readable in every case: a signal stops the run at the next control tick.
 
     Examples:
 
       locoplan run scenarios/walk-square.yaml
+
+      locoplan run scenarios/pick-walk-drop.yaml --live   # then Foxglove: ws://localhost:8765
 
       locoplan run scenarios/package-transfer.yaml --strategy quasi-static --metrics-json qs.json
 
@@ -80,12 +104,9 @@ def run_command(
     import json
     from pathlib import Path
 
-    from locoplan.exceptions import SimulationError, SolverFailure
-    from locoplan.log.termination import install_termination_handlers
+    from locoplan import interrupt
     from locoplan.plan import STRATEGIES, PlanError
-    from locoplan.report.metrics_table import metrics_table
     from locoplan.scenario.model import Scenario
-    from locoplan.sim.run import RunOptions, run_scenario
 
     if strategy is not None and strategy not in STRATEGIES:
         _fail(EXIT_BAD_INPUT, f"unknown --strategy '{strategy}'; allowed: {', '.join(STRATEGIES)}")
@@ -97,44 +118,69 @@ def run_command(
         _fail(EXIT_BAD_INPUT, f"unknown --qp '{qp_backend}'; allowed: daqp, proxsuite, piqp")
     if not duration_scale > 0:
         _fail(EXIT_BAD_INPUT, f"--duration-scale must be positive, got {duration_scale}")
-    scenario, text = _load_with_text_or_exit(file)
+    if pace is not None and not live:
+        _fail(EXIT_BAD_INPUT, "--pace applies with --live only")
+    scenario, text = _load_with_text_or_exit(file, max_sim_time)
     assert isinstance(scenario, Scenario)
-    options = RunOptions(
-        strategy=strategy,
-        model=model,
-        duration_scale=duration_scale,
-        out_dir=Path(out_dir),
-        mapping=mapping,
-        qp_backend=qp_backend,
-        f_min=f_min,
-        video=None if video is None else Path(video),
-    )
     show = not quiet and out.is_terminal
-    restore = install_termination_handlers()
     log_hint = Path(out_dir) / f"{scenario.name}.mcap"
+    # From here a signal only sets a flag: the run stops at its next control tick (or the next
+    # stage of its preparation), so the log is closed whole and no compiled kernel sees it.
     try:
-        with _sim_progress(show) as bar:
-            # Until the first simulated step: building the scene and the controller, which on
-            # a machine's first run also compiles the numeric kernels (numba, about 25 s,
-            # cached afterwards).
-            task_id = bar.add_task(f"{scenario.name}: {PREPARING}", total=1.0)
+        with interrupt.deferring():
+            from locoplan.exceptions import SimulationError, SolverFailure
+            from locoplan.sim.live import LiveView
+            from locoplan.sim.run import RunOptions, run_scenario
 
-            def on_progress(t: float, total: float) -> None:
-                bar.update(task_id, completed=t, total=total, description=scenario.name)
+            options = RunOptions(
+                strategy=strategy,
+                model=model,
+                duration_scale=duration_scale,
+                out_dir=Path(out_dir),
+                mapping=mapping,
+                qp_backend=qp_backend,
+                f_min=f_min,
+                video=None if video is None else Path(video),
+                live=LiveView(port, 1.0 if pace is None else pace) if live else None,
+            )
+            with _sim_progress(show) as bar:
+                # Until the first simulated step: building the scene and the controller, which
+                # on a machine's first run also compiles the numeric kernels (numba, about
+                # 25 s, cached afterwards).
+                task_id = bar.add_task(f"{scenario.name}: {PREPARING}", total=1.0)
 
-            result = run_scenario(scenario, text, options, on_progress)
+                def on_progress(t: float, total: float) -> None:
+                    bar.update(task_id, completed=t, total=total, description=scenario.name)
+
+                if live:
+                    err.print(
+                        f"live view: Foxglove > Open connection > Foxglove WebSocket > "
+                        f"ws://localhost:{port} (layout: docs/foxglove-layout.json)",
+                        markup=False,
+                    )
+                result = run_scenario(scenario, text, options, on_progress)
+        interrupt.check()  # a signal that came while the run was ending
     except PlanError as exc:
         _fail(EXIT_BAD_INPUT, f"{file}: cannot plan: {exc}")
+    except OSError as exc:
+        if not live or exc.errno is not None:
+            raise
+        _fail(EXIT_BAD_INPUT, f"--live: {exc}")
     except (SolverFailure, SimulationError) as exc:
         if debug:
             raise
         _fail(EXIT_RUN_BROKE, f"run failed: {exc}\nthe log up to the failure is in {log_hint}")
     except (KeyboardInterrupt, SystemExit) as exc:
-        if isinstance(exc, SystemExit) and exc.code in (0, None):
+        if interrupt.interruption(exc) is None:
             raise
-        _fail(EXIT_INTERRUPTED, f"interrupted; the log up to here is in {log_hint}")
-    finally:
-        restore()
+        _interrupted(exc, f"the log up to here is in {log_hint}")
+    except SystemError as exc:
+        # A compiled kernel that saw an interruption (a signal before the handlers were set).
+        if interrupt.interruption(exc) is None:
+            raise
+        _interrupted(exc, f"the log up to here is in {log_hint}")
+    from locoplan.report.metrics_table import metrics_table
+
     if metrics_json is not None:
         try:
             Path(metrics_json).write_text(json.dumps(result.metrics, indent=2) + "\n", "utf-8")

@@ -6,7 +6,7 @@ import sys
 
 import typer
 
-from locoplan.cli.common import EXIT_BAD_INPUT, EXIT_OK, _fail, app, err, out
+from locoplan.cli.common import EXIT_BAD_INPUT, EXIT_OK, MAX_SIM_TIME, _fail, app, err, out
 
 _VALIDATE_FILES = typer.Argument(
     ...,
@@ -17,11 +17,15 @@ _VALIDATE_FILES = typer.Argument(
 
 
 @app.command("validate")
-def validate_command(files: list[str] = _VALIDATE_FILES) -> None:
+def validate_command(
+    files: list[str] = _VALIDATE_FILES, max_sim_time: float = MAX_SIM_TIME
+) -> None:
     """Check task scripts against the format; nothing is simulated.
 
     Prints 'ok   FILE (name, N tasks)' for a valid file,
     and 'FILE:LINE:COLUMN: message' for each problem of an invalid one.
+    A script whose simulation would end after --max-sim-time (default one
+    hour simulated) is refused, with the wall time it would take.
     Exit status 0 when every file is valid, 2 otherwise.
 
     Examples:
@@ -32,6 +36,7 @@ def validate_command(files: list[str] = _VALIDATE_FILES) -> None:
     """
     from locoplan.exceptions import ScenarioError
     from locoplan.scenario import load_scenario_file
+    from locoplan.scenario.limits import sim_time_issue
     from locoplan.scenario.source import MAX_BYTES
 
     stdin_data: bytes | str | None = None
@@ -49,6 +54,11 @@ def validate_command(files: list[str] = _VALIDATE_FILES) -> None:
             all_ok = False
             for issue in exc.issues:
                 out.print(str(issue), markup=False, emoji=False, highlight=False)
+            continue
+        too_long = sim_time_issue(loaded, max_sim_time)
+        if too_long is not None:
+            all_ok = False
+            out.print(str(too_long), markup=False, emoji=False, highlight=False)
             continue
         n = len(loaded.scenario.tasks)
         shown = "<stdin>" if name == "-" else name

@@ -24,6 +24,7 @@ from locoplan.compare.variants import (
     schedules_identical,
 )
 from locoplan.scenario import Scenario
+from locoplan.sim.live import LiveView
 
 # Metrics shown with a difference column (proposed - baseline); key path into the metrics.
 DIFFERENCE_KEYS: dict[str, tuple[str, ...]] = {
@@ -171,6 +172,7 @@ def compare_scenario(
     jobs: int | None = None,
     qp_backend: str = "daqp",
     progress: VariantProgress | None = None,
+    live: LiveView | None = None,
 ) -> Comparison:
     """Run `scenario` under both variants of `kind` and compare.
 
@@ -178,13 +180,21 @@ def compare_scenario(
     before anything runs. Logs go to `out_dir/<scenario>-<label>.mcap`; nothing else is
     written (see `write_compare_json` and `locoplan.report.compare_plots`). `strategy` is the
     one strategy of a "models" comparison (default: the script's). Raises ValueError for a
-    bad `kind`, `strategy` with "strategies", or jobs < 1.
+    bad `kind`, `strategy` with "strategies", or jobs < 1. With `live`, the runs go one
+    after the other in this process, each served live while it runs (`locoplan.sim.live`).
     """
     variants = comparison_variants(scenario, kind, strategy)
     plans = compile_variant_plans(scenario, variants)
     identical = schedules_identical(plans[0], plans[1])
     outcomes = run_variants(
-        scenario, text, variants, out_dir, jobs=jobs, qp_backend=qp_backend, progress=progress
+        scenario,
+        text,
+        variants,
+        out_dir,
+        jobs=jobs,
+        qp_backend=qp_backend,
+        progress=progress,
+        live=live,
     )
     pair = (outcomes[0], outcomes[1])
     return Comparison(

@@ -21,11 +21,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from locoplan import interrupt
 from locoplan.compare.trace import RunTrace, trace_from_run
 from locoplan.compare.variants import Variant
 from locoplan.exceptions import SimulationError, SolverFailure
 from locoplan.robot.description import load_robot_description
 from locoplan.scenario import Scenario
+from locoplan.sim.live import LiveView
 from locoplan.sim.run import RunOptions, run_scenario
 
 # (label, simulated time s, total s) for each progress report.
@@ -69,6 +71,7 @@ class _Job:
     variant: Variant
     out_dir: Path
     qp_backend: str
+    live: LiveView | None = None
 
 
 # Set in worker processes only (by `_init_worker`): where progress messages go.
@@ -78,8 +81,9 @@ _worker_queue: Any = None
 def _init_worker(progress_queue: Any) -> None:
     global _worker_queue
     _worker_queue = progress_queue
-    # Ctrl-C in a terminal reaches every process of the group; the run's own handlers close
-    # its log. Nothing else to set up here.
+    # Ctrl-C in a terminal reaches every process of the group, and the parent stops its
+    # workers with SIGINT: either stops the run at its next control tick, its log closed.
+    interrupt.install_for_worker()
 
 
 def _queue_progress(label: str) -> Callable[[float, float], None]:
@@ -104,6 +108,7 @@ def run_variant(job: _Job, progress: Callable[[float, float], None] | None) -> V
         out_dir=job.out_dir,
         log_name=v.log_name,
         qp_backend=job.qp_backend,
+        live=job.live,
     )
     log_path = job.out_dir / f"{v.log_name}.mcap"
     try:
@@ -142,21 +147,24 @@ def run_variants(
     jobs: int | None = None,
     qp_backend: str = "daqp",
     progress: VariantProgress | None = None,
+    live: LiveView | None = None,
 ) -> tuple[VariantOutcome, ...]:
     """Run every variant of `scenario` (its YAML `text` goes into each log) and return the
     outcomes in the order of `variants`. `jobs` (default `default_jobs()`) processes run at
     once; 1 runs everything in this process. Logs go to `out_dir/<variant.log_name>.mcap`.
 
     Raises ValueError for jobs < 1; a run that breaks is an outcome, not an exception;
-    KeyboardInterrupt / SystemExit stop the workers (each closes its log) and propagate.
+    KeyboardInterrupt / SystemExit stop the workers (each closes its log) and propagate,
+    as does a signal deferred by `locoplan.interrupt` (checked while waiting for workers).
+    With `live`, the variants run one after the other in this process, each served live.
     """
     if jobs is None:
         jobs = default_jobs()
     if jobs < 1:
         raise ValueError(f"jobs must be >= 1, got {jobs}")
     out_dir.mkdir(parents=True, exist_ok=True)
-    work = [_Job(scenario, text, v, out_dir, qp_backend) for v in variants]
-    jobs = min(jobs, len(work))
+    work = [_Job(scenario, text, v, out_dir, qp_backend, live) for v in variants]
+    jobs = 1 if live is not None else min(jobs, len(work))
     if jobs <= 1:
         return tuple(
             run_variant(
@@ -204,6 +212,7 @@ def _run_parallel(
         pending = set(futures)
         while pending:
             done, pending = wait(pending, timeout=POLL_PERIOD, return_when=FIRST_COMPLETED)
+            interrupt.check()
             _drain(q, progress, pids)
             for f in done:
                 results[futures[f]] = f.result()

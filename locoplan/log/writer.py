@@ -15,6 +15,12 @@ writer finishes its chunk and hands it to the OS, so a process killed with SIGKI
 file that `locoplan.log.reader.read_log` reads up to at most that long before the last write
 (measured: 0.5 s median, 0.95 s max over 8 kills at the 1 s default). A flush costs 0.2-1 ms
 and does not measurably grow the file. Not thread-safe: one writer per thread.
+
+Live view: `serve(port)` starts foxglove-sdk's WebSocket server on the writer's own
+`foxglove.Context`, so every channel that goes to the MCAP file is also served to Foxglove
+clients (Foxglove WebSocket protocol, loopback only), with the simulation time as the server's
+time; `publish(t)` hands the queued messages to both sinks at once. Without `serve` nothing
+changes.
 """
 
 from __future__ import annotations
@@ -133,6 +139,7 @@ class RunLogWriter:
         self._tf_encoders: dict[_FramePairs, FrameTransformsEncoder] = {}
         self._joint_channel: foxglove.Channel | None = None
         self._joint_encoders: dict[tuple[str, ...], JointStatesEncoder] = {}
+        self._server: Any = None  # foxglove.websocket.WebSocketServer, with `serve`
 
         start_ns = time.time_ns()
         record = {
@@ -346,6 +353,49 @@ class RunLogWriter:
             channel = self._new_json_channel(topics.EVENTS, _EVENT_SCHEMA)
         self._emit(channel, ns, self._encode_json({"kind": kind, **fields}))
 
+    # -- live view -------------------------------------------------------------------
+
+    def serve(self, port: int = 8765, host: str = "127.0.0.1", bind_wait_s: float = 2.0) -> int:
+        """Serve this file's channels live over the Foxglove WebSocket protocol (foxglove-sdk's
+        server on the writer's context) until the file closes; returns the port (0 picks a
+        free one). Retries for `bind_wait_s` while the port is still held (a previous run's
+        server closing); then OSError."""
+        from foxglove.websocket import Capability
+
+        self._check_open()
+        if self._server is not None:
+            raise ValueError(f"RunLogWriter for {self.path} already serves on {self._server.port}")
+        deadline = time.monotonic() + bind_wait_s
+        while True:
+            try:
+                self._server = foxglove.start_server(
+                    name=f"locoplan {self.path.stem}",
+                    host=host,
+                    port=port,
+                    capabilities=[Capability.Time],
+                    context=self._context,
+                )
+                break
+            except RuntimeError as exc:
+                if time.monotonic() >= deadline:
+                    raise OSError(f"cannot serve on {host}:{port}: {exc}") from None
+                time.sleep(0.05)
+        self._server.broadcast_time(self._last_ns)
+        return int(self._server.port)
+
+    @property
+    def serving(self) -> bool:
+        """True while `serve` has a server running."""
+        return self._server is not None
+
+    def publish(self, t: float) -> None:
+        """Hand the queued messages to the sinks now (the live view sees them without
+        waiting for a batch) and broadcast `t` (s, simulation time) as the server's time."""
+        self._check_open()
+        self._drain()
+        if self._server is not None:
+            self._server.broadcast_time(max(0, round(t * 1e9)))
+
     # -- end of run --------------------------------------------------------------------
 
     def finish(self, metrics: Mapping[str, Any]) -> None:
@@ -404,7 +454,12 @@ class RunLogWriter:
                     },
                 )
         finally:
-            self._writer.close()
+            try:
+                self._writer.close()
+            finally:
+                if self._server is not None:
+                    server, self._server = self._server, None
+                    server.stop()
 
     def _check_open(self) -> None:
         if self._closed:

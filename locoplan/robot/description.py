@@ -72,11 +72,18 @@ class RobotDescription:
 
 
 def robots_dir() -> Path:
-    """The directory holding `<name>/robot.yaml`: $LOCOPLAN_ROBOTS_DIR or `<repo>/robots`."""
+    """The directory holding `<name>/robot.yaml`, the first of: $LOCOPLAN_ROBOTS_DIR; the
+    robots an installed package carries (`locoplan/_data/robots`, see setup.py); the
+    repository checkout's `robots/` (beside the `locoplan/` package)."""
     override = os.environ.get(ROBOTS_DIR_ENV)
     if override:
-        return Path(override)
-    return Path(locoplan.__file__).resolve().parents[1] / "robots"
+        return Path(override).expanduser()
+    package = Path(locoplan.__file__).resolve().parent
+    installed = package / "_data" / "robots"
+    checkout = package.parent / "robots"
+    if not installed.is_dir() and checkout.is_dir():
+        return checkout
+    return installed
 
 
 def resolve_robot_yaml(name_or_path: str | Path) -> Path:

@@ -24,6 +24,8 @@ from locoplan.control.controller import (
     LocoManipulationController,
 )
 from locoplan.exceptions import SimulationError, SolverFailure
+from locoplan.interrupt import STATE as _INTERRUPT
+from locoplan.interrupt import Interrupted
 from locoplan.log.writer import RunLogWriter
 from locoplan.plan import Plan
 from locoplan.plan.hand_paths import default_waypoint
@@ -196,6 +198,9 @@ class ClosedLoop:
         self._events = plan.events
         self._next_event = 0
         self._init_view()
+        # Called with the simulation time after each recorded sample (`locoplan.sim.live`:
+        # publishes to the live view and sleeps to keep pace); None costs one test per sample.
+        self.pacer: Callable[[float], None] | None = None
         if log is not None:
             log.joint_limits(
                 list(desc.joint_names),
@@ -309,7 +314,9 @@ class ClosedLoop:
         t_end: float,
         progress: Callable[[float], None] | None = None,
     ) -> RunRecord:
-        """Simulate until `t_end` (s) or a fall. Raises SolverFailure / SimulationError."""
+        """Simulate until `t_end` (s) or a fall. Raises SolverFailure / SimulationError, and
+        `locoplan.interrupt.Interrupted` at the first control tick after a deferred SIGINT /
+        SIGTERM (the record and the log then hold everything up to that tick)."""
         rec = self.record
         be = self.backend
         d = be.data
@@ -327,6 +334,8 @@ class ClosedLoop:
         n_ticks = 0
         next_record = self._next_record
         last_progress = 0.0
+        pacer = self.pacer
+        interrupt = _INTERRUPT
         self._view_start()
         try:
             out = None
@@ -339,6 +348,8 @@ class ClosedLoop:
                 # belts, pushes and the fall check need no finer timing than 2 ms.
                 tick = out is None or i % decimation == 0
                 if tick:
+                    if interrupt.signum:
+                        raise Interrupted(interrupt.signum)
                     q, v = be.robot_qv()
                     out = controller.step(t, q, v)
                     t_dynamics += out.dynamics_time_s
@@ -401,6 +412,8 @@ class ClosedLoop:
                     rec.stance.append(out.stance)
                     self._record(t, d.time, out, applied)
                     t_logging += perf_counter() - t_l
+                    if pacer is not None:
+                        pacer(d.time)
                 if tick and not rec.fell and self._fallen():
                     rec.fell = True
                     rec.fall_time = d.time

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from locoplan import interrupt
 from locoplan.control.contact import ContactLimits
 from locoplan.control.controller import ControllerSettings
 from locoplan.control.mpc import MpcSettings
@@ -37,6 +38,7 @@ from locoplan.plan import Plan, compile_plan
 from locoplan.render.samples import RenderSample
 from locoplan.robot.description import RobotDescription, load_robot_description
 from locoplan.scenario import Scenario
+from locoplan.sim.live import LiveView, Pacer
 from locoplan.sim.loop import RECORD_PERIOD, ClosedLoop, Push, RunRecord
 from locoplan.sim.scene import FixtureDef, ObjectDef, Scene, build_scene
 
@@ -53,7 +55,9 @@ class RunOptions:
     """How to run: strategy/model override the script's; `duration_scale` stretches every
     task time and `end` (K > 1 is slower); `mapping` and `qp_backend` select the torque mapping
     and QP solver; `pushes` are trunk disturbances (tests, robustness studies); `video` also
-    renders the run into that MP4 (`locoplan.render`; up to the failure when the run breaks)."""
+    renders the run into that MP4 (`locoplan.render`; up to the failure when the run breaks);
+    `live` serves the log's topics to Foxglove while the run goes, paced (`locoplan.sim.live`;
+    needs `log`)."""
 
     strategy: str | None = None
     model: str | None = None
@@ -66,6 +70,7 @@ class RunOptions:
     pushes: tuple[Push, ...] = ()
     log_name: str | None = None
     video: Path | None = None
+    live: LiveView | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -330,16 +335,23 @@ def run_scenario(
     progress: Callable[[float, float], None] | None = None,
 ) -> RunResult:
     """Run `scenario` closed loop. Raises SolverFailure / SimulationError when the run breaks
-    (the log is closed and readable), KeyboardInterrupt / SystemExit when interrupted."""
+    (the log is closed and readable), KeyboardInterrupt / SystemExit when interrupted
+    (`locoplan.interrupt.Interrupted` for a deferred SIGINT / SIGTERM, at the next control
+    tick or the next stage of the preparation); OSError when `options.live` cannot serve on
+    its port."""
     options = options or RunOptions()
+    if options.live is not None and not options.log:
+        raise ValueError("a live view needs the log (RunOptions.log)")
     if options.duration_scale != 1.0:
         from locoplan.scenario.timing import scale_timing
 
         scenario = scale_timing(scenario, options.duration_scale)
     plan = compile_plan(scenario, options.strategy)
+    interrupt.check()
     desc = load_robot_description(scenario.robot)
     scene = scene_for(scenario, desc)
     settings = controller_settings(scenario, options)
+    interrupt.check()
     log_path: Path | None = None
     writer: RunLogWriter | None = None
     if options.log:
@@ -364,6 +376,8 @@ def run_scenario(
         )
     start = scenario.robot_start
     with writer if writer is not None else contextlib.nullcontext():
+        if writer is not None and options.live is not None:
+            writer.serve(options.live.port, options.live.host)
         loop = ClosedLoop(
             scene,
             desc,
@@ -374,6 +388,9 @@ def run_scenario(
             log=writer,
             pushes=options.pushes,
         )
+        if writer is not None and options.live is not None:
+            loop.pacer = Pacer(writer, options.live.pace)
+        interrupt.check()  # the controller's kernels are compiled or loaded by now
         samples: list[RenderSample] = []
         rec = _run_recording(loop, plan.t_end, _Progress(progress, plan.t_end), options, samples)
         metrics = compute_metrics(scenario, plan, rec, options, log_path)
