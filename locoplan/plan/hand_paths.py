@@ -49,9 +49,7 @@ def initial_waypoint(
     default = default_waypoint(hand)
     idle = make_track(HAND_NAMES[hand], default, [])
     c = track_clearance(idle, trunk, obstacles, 0.0, max(until, 0.0), k.APPROACH_CLEARANCE)
-    import os
-
-    if c.first_below is None or os.environ.get("NOTUCK"):
+    if c.first_below is None:
         return default
     return tuck_waypoint(hand, k.HAND_TUCK_IN_TRUNK[1])
 
