@@ -77,8 +77,7 @@ def run_command(
         "--pace",
         metavar="K",
         min=0.0,
-        help="Run at K times real time (default 1 with --live, else as fast as it goes; "
-        "0: as fast as it goes).",
+        help="With --live: run at K times real time (default 1; 0: as fast as it goes).",
         show_default=False,
     ),
     max_sim_time: float = MAX_SIM_TIME,
