@@ -77,8 +77,7 @@ def run_command(
         "--pace",
         metavar="K",
         min=0.0,
-        help="Run at K times real time (default 1 with --live, else as fast as it goes; "
-        "0: as fast as it goes).",
+        help="With --live: run at K times real time (default 1; 0: as fast as it goes).",
         show_default=False,
     ),
     max_sim_time: float = MAX_SIM_TIME,
@@ -173,12 +172,12 @@ def run_command(
     except (KeyboardInterrupt, SystemExit) as exc:
         if interrupt.interruption(exc) is None:
             raise
-        _interrupted(exc, f"the log up to here is in {log_hint}")
+        _interrupted(exc, _log_note(log_hint))
     except SystemError as exc:
         # A compiled kernel that saw an interruption (a signal before the handlers were set).
         if interrupt.interruption(exc) is None:
             raise
-        _interrupted(exc, f"the log up to here is in {log_hint}")
+        _interrupted(exc, _log_note(log_hint))
     from locoplan.report.metrics_table import metrics_table
 
     if metrics_json is not None:
@@ -189,3 +188,13 @@ def run_command(
     if not quiet:
         out.print(metrics_table(result.metrics))
     raise typer.Exit(EXIT_OK if result.passed else EXIT_EXPECTATION)
+
+
+def _log_note(log: object) -> str:
+    """Where the interrupted run's log is, or that it stopped before opening one."""
+    from pathlib import Path
+
+    assert isinstance(log, Path)
+    if log.exists():
+        return f"the log up to here is in {log}"
+    return "stopped while preparing the run, before its log was opened"

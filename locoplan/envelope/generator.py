@@ -6,6 +6,17 @@ is YAML of format version 1 with `expect: {no_fall: true, max_torque_ratio: 1.0}
 `placed` for the families that place an object), a `gait`, an `end` 1 s after its last task,
 and a scene in which nothing overlaps: see the family modules (`transfer`, `carry`,
 `motion`) for what each draws, and `ranges` for the ranges themselves.
+
+Where the scripts differ from a plain uniform draw over issue 12's table, because the scene
+must make physical sense (a draw that breaks one of these is drawn again):
+- walk-carry: the walk goes straight ahead after the turn, and the table the box came from
+  must stay 0.15 m clear of the robot's path, so turns under about 55 deg never occur
+  (accepted turns span 56-90 deg);
+- side-carry: the table and the platform stand side by side, so for steps under ~0.31 m
+  they are narrower than 0.30 m across the step (down to the box's width + 3 / 5 cm);
+- conveyors are long enough along the belt (up to ~1.8 m) that the placed box is still on
+  the belt at `end`, whatever the belt speed;
+- turns and walks last at least one gait period (a 30 deg turn at 65 deg/s would be 0.46 s).
 """
 
 from __future__ import annotations
