@@ -17,6 +17,7 @@ from locoplan.plan.constants import (
     GRASP_SQUEEZE,
     HAND_DEFAULT_IN_TRUNK,
     HAND_RADIUS,
+    HAND_TUCK_IN_TRUNK,
 )
 from locoplan.scenario import load_scenario
 
@@ -77,8 +78,21 @@ def test_hands_at_rest_at_segment_ends_relative_to_their_frame(name) -> None:
                 assert np.linalg.norm(vel) < 1e-12
 
 
-def test_default_pose_before_any_task_follows_trunk() -> None:
+def test_hands_start_tucked_when_the_default_pose_would_sweep_into_the_scene() -> None:
+    # package-transfer turns 90 deg left towards a table whose near edge is 0.25 m away: the
+    # left hand held 0.28 m ahead would sweep into it, so it starts (and rests) tucked; the
+    # right hand, on the far side, keeps the default pose.
     plan = compile_plan(repo_scenario("package-transfer"))
+    assert plan.manipulation.tracks[0].initial.point == pytest.approx(HAND_TUCK_IN_TRUNK)
+    x, y, z = HAND_DEFAULT_IN_TRUNK
+    assert plan.manipulation.tracks[1].initial.point == pytest.approx((x, -y, z))
+    # with nothing near the robot they start in the default pose
+    stand = compile_plan(repo_scenario("stand"))
+    assert stand.manipulation.tracks[0].initial.point == pytest.approx(HAND_DEFAULT_IN_TRUNK)
+
+
+def test_default_pose_before_any_task_follows_trunk() -> None:
+    plan = compile_plan(repo_scenario("walk-square"))
     base = np.array([1.0, 2.0, 0.6])
     yaw = math.radians(40.0)
     ht = plan.hand_targets_at(0.0, base, yaw, np.array([0.2, 0.0, 0.0]), 0.5)

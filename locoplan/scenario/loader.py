@@ -23,6 +23,7 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from locoplan.exceptions import ScenarioError, ScenarioIssue
+from locoplan.scenario.feasibility import check_feasibility
 from locoplan.scenario.messages import LocatedIssue, show, validation_issues
 from locoplan.scenario.model import Scenario
 from locoplan.scenario.semantics import BUILTIN_ROBOTS, check_semantics, resolve_robot_path
@@ -119,6 +120,9 @@ def load_scenario_file(source: str | Path, text: str | bytes | None = None) -> L
         located += check_semantics(
             checked, base_dir=base_dir, task_label=lambda i: _task_label(doc, i)
         )
+    if not located and scenario is not None:
+        # What the robot cannot do, once the script is valid as a script.
+        located += check_feasibility(scenario)
     if located:
         raise ScenarioError(_capped([place(issue) for issue in located], untranslated))
     assert scenario is not None  # no issue means validation succeeded

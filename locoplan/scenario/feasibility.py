@@ -1,0 +1,184 @@
+"""Feasibility checks that need no simulation: what the robot's legs cannot do and scenes that
+cannot exist. Each finding is a `LocatedIssue` whose message starts `infeasible (<reason>):`,
+says what was measured, the limit, and what would make the script feasible; the loader reports
+them like the format's own errors (file:line:column, exit 2), before anything is simulated.
+
+Reasons:
+- `rate`: a walk faster, or a turn quicker, than the gait can step it. A foot in stance moves
+  relative to the hip by the distance the trunk covers in one stance phase, about one gait
+  period; the leg (thigh + calf L = 0.44 m, hip about h = 0.40 m above the sole at the nominal
+  0.60 m trunk height, shared/robot.md) reaches sqrt(L^2 - h^2) = 0.18 m ahead of or behind
+  the hip, so v <= 2 * 0.18 / period is the kinematic bound; half of it, WALK_STRIDE / period,
+  is the limit (knee and swing-timing margin). The hip yaw range (+-30 deg) bounds the yaw a
+  stance foot takes per cycle likewise: |yaw rate| <= 2 * 30 deg / period.
+  Checked against the envelope (README): walks up to 0.35 m/s at periods up to 0.5 s
+  (limit 0.36 m/s) and turns up to 90 deg/s at periods up to 0.5 s (limit 120 deg/s) pass.
+- `overlap`: an object inside the robot's footprint at the start (within
+  ROBOT_FOOTPRINT_RADIUS = 0.135 m of the start position: toes 0.09 m ahead of the ankles,
+  feet 0.1 m either side of the centre line; the envelope's nearest edge is 0.15 m), or an
+  object that sits inside a fixture rather than on it (more than OVERLAP_TOLERANCE deep).
+  Fixtures may stand where the robot starts: the format page's own example has a conveyor
+  reaching to the start position (a fixture's sides are not simulated against the legs,
+  whose geoms do not collide with it).
+"""
+
+from __future__ import annotations
+
+import math
+
+from locoplan.scenario.messages import LocatedIssue
+from locoplan.scenario.model import FixtureSpec, ObjectSpec, Scenario, TurnTask, WalkTask
+
+# Half the kinematic stride of the leg (m): see the module docstring.
+WALK_STRIDE = 0.18
+# Hip yaw range (rad) either side of straight ahead (shared/robot.md).
+HIP_YAW_RANGE = math.radians(30.0)
+# Radius (m) around the start position that the feet occupy: the toe sphere 0.09 m ahead of
+# the ankle on a foot 0.1 m off the centre line, hypot(0.09, 0.10).
+ROBOT_FOOTPRINT_RADIUS = math.hypot(0.09, 0.10)
+# Interpenetration (m) of an object and a fixture below which the object rests on it.
+OVERLAP_TOLERANCE = 0.005
+
+
+def _walk_speed_limit(period: float) -> float:
+    return WALK_STRIDE / period
+
+
+def _turn_rate_limit(period: float) -> float:
+    return 2.0 * HIP_YAW_RANGE / period
+
+
+def _rate_issues(scenario: Scenario) -> list[LocatedIssue]:
+    period = scenario.gait.period
+    issues: list[LocatedIssue] = []
+    v_max = _walk_speed_limit(period)
+    w_max = _turn_rate_limit(period)
+    for i, task in enumerate(scenario.tasks):
+        if isinstance(task, WalkTask):
+            dist = math.hypot(task.distance[0], task.distance[1])
+            v = dist / task.duration
+            if v > v_max + 1e-9:
+                issues.append(
+                    LocatedIssue(
+                        ("tasks", i, "duration"),
+                        f"infeasible (rate): walk of {dist:.3g} m in {task.duration:g} s is "
+                        f"{v:.3g} m/s; with a gait period of {period:g} s the legs step at most "
+                        f"{v_max:.3g} m/s: give the walk at least {dist / v_max:.2f} s",
+                    )
+                )
+        angle = task.angle if isinstance(task, TurnTask | WalkTask) else None
+        if angle is not None:
+            rate = math.radians(abs(angle)) / task.duration
+            if rate > w_max + 1e-9:
+                need = math.radians(abs(angle)) / w_max
+                issues.append(
+                    LocatedIssue(
+                        ("tasks", i, "duration"),
+                        f"infeasible (rate): {task.action} by {abs(angle):g} deg in "
+                        f"{task.duration:g} s is {math.degrees(rate):.0f} deg/s; the hip yaw "
+                        f"range (+-30 deg) allows at most {math.degrees(w_max):.0f} deg/s "
+                        f"with a gait period of {period:g} s: give it at least {need:.2f} s",
+                    )
+                )
+    return issues
+
+
+def _rect_corners(
+    cx: float, cy: float, hx: float, hy: float, yaw: float
+) -> list[tuple[float, float]]:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return [
+        (cx + c * dx - s * dy, cy + s * dx + c * dy)
+        for dx, dy in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))
+    ]
+
+
+def _rect_penetration(a: list[tuple[float, float]], b: list[tuple[float, float]]) -> float:
+    """Smallest overlap (m) of two convex quadrilaterals along their edge normals (separating
+    axis test): <= 0 when they do not overlap."""
+    depth = math.inf
+    for poly in (a, b):
+        for k in range(4):
+            x0, y0 = poly[k]
+            x1, y1 = poly[(k + 1) % 4]
+            nx, ny = y1 - y0, x0 - x1
+            n = math.hypot(nx, ny)
+            if n < 1e-12:
+                continue
+            nx, ny = nx / n, ny / n
+            pa = [px * nx + py * ny for px, py in a]
+            pb = [px * nx + py * ny for px, py in b]
+            depth = min(depth, min(max(pa), max(pb)) - max(min(pa), min(pb)))
+    return depth
+
+
+def _object_rect(obj: ObjectSpec) -> list[tuple[float, float]]:
+    if obj.shape == "sphere":
+        r = obj.size[0]
+        return _rect_corners(obj.position[0], obj.position[1], r, r, 0.0)
+    return _rect_corners(
+        obj.position[0], obj.position[1], obj.size[0] / 2, obj.size[1] / 2, math.radians(obj.yaw)
+    )
+
+
+def _object_z(obj: ObjectSpec) -> tuple[float, float]:
+    half = obj.size[0] if obj.shape == "sphere" else obj.size[2] / 2
+    return obj.position[2] - half, obj.position[2] + half
+
+
+def _fixture_rect(fx: FixtureSpec) -> list[tuple[float, float]]:
+    return _rect_corners(
+        fx.position[0], fx.position[1], fx.size[0] / 2, fx.size[1] / 2, math.radians(fx.yaw)
+    )
+
+
+def _distance_to_rect(px: float, py: float, rect: list[tuple[float, float]]) -> float:
+    """Distance (m) from a point to a rectangle given by its corners (0 inside)."""
+    (x0, y0), (x1, y1), _, (x3, y3) = rect
+    # Axes of the rectangle: corner 0 -> 1 and corner 0 -> 3.
+    ux, uy = x1 - x0, y1 - y0
+    vx, vy = x3 - x0, y3 - y0
+    lu, lv = math.hypot(ux, uy), math.hypot(vx, vy)
+    ux, uy, vx, vy = ux / lu, uy / lu, vx / lv, vy / lv
+    cx, cy = (x1 + x3) / 2, (y1 + y3) / 2
+    du = abs((px - cx) * ux + (py - cy) * uy) - lu / 2
+    dv = abs((px - cx) * vx + (py - cy) * vy) - lv / 2
+    return math.hypot(max(du, 0.0), max(dv, 0.0))
+
+
+def _overlap_issues(scenario: Scenario) -> list[LocatedIssue]:
+    issues: list[LocatedIssue] = []
+    sx, sy = scenario.robot_start.position
+    r = ROBOT_FOOTPRINT_RADIUS
+    for name, obj in scenario.objects.items():
+        rect = _object_rect(obj)
+        d = _distance_to_rect(sx, sy, rect)
+        if d < r:
+            issues.append(
+                LocatedIssue(
+                    ("objects", name, "position"),
+                    f"infeasible (overlap): object '{name}' comes within {d:.3f} m of the "
+                    f"robot's start position, inside its body; the robot needs {r:.3f} m: "
+                    f"move it at least {r - d + 0.001:.3f} m further away",
+                )
+            )
+        bottom, top = _object_z(obj)
+        for fname, fx in scenario.fixtures.items():
+            depth_z = min(top, fx.size[2]) - max(bottom, 0.0)
+            depth_xy = _rect_penetration(rect, _fixture_rect(fx))
+            depth = min(depth_z, depth_xy)
+            if depth > OVERLAP_TOLERANCE:
+                issues.append(
+                    LocatedIssue(
+                        ("objects", name, "position"),
+                        f"infeasible (overlap): object '{name}' sits {depth:.3f} m inside "
+                        f"fixture '{fname}' (top at {fx.size[2]:g} m); an object resting on "
+                        f"it has its centre at z = {fx.size[2] + (top - bottom) / 2:.3f} m",
+                    )
+                )
+    return issues
+
+
+def check_feasibility(scenario: Scenario) -> list[LocatedIssue]:
+    """Every infeasibility of `scenario` found without simulating (module docstring)."""
+    return _rate_issues(scenario) + _overlap_issues(scenario)

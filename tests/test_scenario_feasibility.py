@@ -1,0 +1,106 @@
+"""Feasibility refusals before simulating (locoplan.scenario.feasibility): every reason is
+triggered from a task script, reported at file:line:column with exit 2, and says what would make
+the script feasible; scripts inside the envelope are not refused."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from locoplan.envelope import generate_suite
+from locoplan.exceptions import ScenarioError
+from locoplan.scenario.feasibility import check_feasibility
+from locoplan.scenario.loader import load_scenario, load_scenario_file
+
+HEAD = """version: 1
+name: feas
+gait: {period: 0.4, swing: 0.15}
+"""
+
+
+def _issues(text: str, tmp_path: Path) -> list[str]:
+    path = tmp_path / "s.yaml"
+    path.write_text(text)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario_file(path)
+    return [f"{i.line}:{i.column}: {i.message}" for i in info.value.issues]
+
+
+def test_walk_faster_than_the_legs_step_is_refused_with_the_duration_it_needs(
+    tmp_path: Path,
+) -> None:
+    text = HEAD + "tasks:\n  - {action: walk, distance: [100, 0], start: 0, duration: 2}\n"
+    [msg] = _issues(text, tmp_path)
+    assert msg.startswith("5:")
+    assert "infeasible (rate): walk of 100 m in 2 s is 50 m/s" in msg
+    # 0.18 m half stride per 0.4 s period: 0.45 m/s, so 100 m needs 222 s
+    assert "at most 0.45 m/s" in msg
+    assert "at least 222.22 s" in msg
+
+
+def test_turn_quicker_than_the_hip_yaw_range_allows_is_refused(tmp_path: Path) -> None:
+    text = HEAD + "tasks:\n  - {action: turn, angle: 180, start: 0, duration: 0.5}\n"
+    [msg] = _issues(text, tmp_path)
+    assert "infeasible (rate): turn by 180 deg in 0.5 s is 360 deg/s" in msg
+    # 2 x 30 deg per 0.4 s period = 150 deg/s
+    assert "at most 150 deg/s" in msg
+    assert "at least 1.20 s" in msg
+
+
+def test_object_inside_the_robot_is_refused(tmp_path: Path) -> None:
+    text = (
+        HEAD
+        + "objects:\n"
+        + "  box: {shape: box, size: [0.1, 0.1, 0.1], mass: 1, position: [0.05, 0, 0.5]}\n"
+        + "tasks:\n  - {action: stand, start: 0, duration: 1}\n"
+    )
+    [msg] = _issues(text, tmp_path)
+    assert msg.startswith("5:")
+    assert "infeasible (overlap): object 'box' comes within 0.000 m" in msg
+    assert "inside its body" in msg and "move it at least 0.136 m further away" in msg
+
+
+def test_object_sunk_into_its_table_is_refused_with_the_resting_height(tmp_path: Path) -> None:
+    text = (
+        HEAD
+        + "objects:\n"
+        + "  box: {shape: box, size: [0.2, 0.2, 0.2], mass: 1, position: [0.4, 0, 0.45]}\n"
+        + "fixtures:\n  table: {kind: table, position: [0.5, 0, 0], size: [0.4, 0.6, 0.45]}\n"
+        + "tasks:\n  - {action: stand, start: 0, duration: 1}\n"
+    )
+    [msg] = _issues(text, tmp_path)
+    assert "infeasible (overlap): object 'box' sits 0.100 m inside fixture 'table'" in msg
+    assert "centre at z = 0.550 m" in msg
+
+
+def test_validate_exits_2_with_file_line_column(tmp_path: Path) -> None:
+    path = tmp_path / "fast.yaml"
+    path.write_text(
+        HEAD + "tasks:\n  - {action: walk, distance: [100, 0], start: 0, duration: 2}\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-m", "locoplan", "validate", str(path)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert out.returncode == 2
+    assert f"{path}:5:" in out.stdout + out.stderr
+    assert "Traceback" not in out.stdout + out.stderr
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+def test_envelope_scripts_are_not_refused(seed: int) -> None:
+    # Refusing inside the envelope counts against the planner: none of these may be refused.
+    for script in generate_suite(60, seed):
+        scenario = load_scenario(script.name, script.text)
+        assert check_feasibility(scenario) == [], script.text
+
+
+def test_repository_scripts_are_not_refused() -> None:
+    root = Path(__file__).resolve().parents[1] / "scenarios"
+    for path in sorted(root.glob("*.yaml")):
+        assert check_feasibility(load_scenario(path)) == [], path
