@@ -58,6 +58,9 @@ LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (g
 # thinks it lighter made the hands sag and the robot fall forward after placing it.
 LOAD_RAMP_DOWN = 0.6  # s
 LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
+# Time constant (s) of the low-pass filter on the measured hand load: above the 500 Hz tick's
+# contact noise, well below the 0.6-1.0 s load ramps it corrects.
+LOAD_FILTER_TAU = 0.03
 FEET = ("L", "R")
 OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
@@ -170,6 +173,11 @@ class LocoManipulationController:
         self._footholds: dict[tuple[int, float], tuple[FloatArray, float]] = {}
         self._shift_now = np.zeros(2)
         self._object_cache: dict[int, FloatArray] = {}
+        # Measured-load feedback (see `_update_load`): filtered measured mass (kg) and the
+        # offset (kg) of the measurement from the plan's load now.
+        self._load_filtered: float | None = None
+        self._load_offset = 0.0
+        self._load_t = -math.inf
         # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
         self._cols_leg = [np.arange(6, 11), np.arange(11, 16)]
         self._cols_arm = [np.arange(16, 19), np.arange(19, 22)]
@@ -377,8 +385,51 @@ class LocoManipulationController:
                     del cache[k]
         return np.array([cache[k] for k in keys])
 
+    def _update_load(self, t: float, hand_load: float | None) -> None:
+        """Fold a measured hand load (N, vertical force the hands exert on held objects: wrist
+        force sensors) into the load model: the load the controller uses at time t' is the
+        plan's at t' plus today's offset of the measurement from the plan, within 0 and the
+        mass of what the plan has in the hands.
+
+        Why: the plan's load is a guess at when the weight comes on and goes off. An object
+        that leaves its table later than planned (hands 2-3 cm lower than planned under the
+        load), touches its support early while being lowered, or is still in the air at the
+        planned release, made the MPC and the WBC push for a load that was not there (or
+        forget one that was); those runs fell. With the measurement, the plan keeps its shape
+        (the CoM shift still leads the load) but not its errors."""
+        if hand_load is None:
+            return
+        raw = max(0.0, hand_load / GRAVITY)
+        if self._load_filtered is None or not math.isfinite(self._load_t):
+            self._load_filtered = raw
+        else:
+            dt = max(0.0, t - self._load_t)
+            a = dt / (LOAD_FILTER_TAU + dt)
+            self._load_filtered += a * (raw - self._load_filtered)
+        self._load_t = t
+        planned = float(self._planned_mass(np.array([t]))[0])
+        self._load_offset = self._load_filtered - planned
+
     def carried_mass(self, times: FloatArray) -> FloatArray:
-        """Mass (kg) the hands carry at `times` (n,): each held object's mass times a load
+        """Mass (kg) the controller takes the hands to carry at `times` (n,): the plan's load
+        (`_planned_mass`) corrected by the measured hand load (`_update_load`) while the plan
+        has an object between the hands (grasp to release)."""
+        planned = self._planned_mass(times)
+        if self._load_offset == 0.0:
+            return planned
+        t = np.asarray(times, dtype=float)
+        window = np.zeros(t.shape, dtype=bool)
+        top = np.zeros(t.shape)
+        for h in self.plan.holds:
+            inside = (t >= h.grasp) & (t < h.release)
+            window |= inside
+            top = np.where(inside, top + h.mass, top)
+        corrected = np.clip(planned + self._load_offset, 0.0, top)
+        return np.where(window, corrected, planned)
+
+    def _planned_mass(self, times: FloatArray) -> FloatArray:
+        """Mass (kg) the plan has the hands carry at `times` (n,): each held object's mass times a
+        load
         fraction that rises smoothly over LOAD_RAMP after the planned lift-off and falls over
         LOAD_RAMP_DOWN before a drop's release (a throw lets go at once).
 
@@ -420,8 +471,12 @@ class LocoManipulationController:
         return -(mass / (self.mass + mass))[:, None] * d
 
     # -- the tick ------------------------------------------------------------------------------
-    def step(self, t: float, q: FloatArray, v: FloatArray) -> ControlOutput:
-        """Torques (16,) for state (q (23,), v (22,), pinocchio convention) at time t (s)."""
+    def step(
+        self, t: float, q: FloatArray, v: FloatArray, hand_load: float | None = None
+    ) -> ControlOutput:
+        """Torques (16,) for state (q (23,), v (22,), pinocchio convention) at time t (s);
+        `hand_load` (N) is the measured vertical force the hands exert on what they hold
+        (None: no sensor, the plan's load alone)."""
         t_dyn = time.perf_counter()
         r = self.robot
         q = np.ascontiguousarray(q, dtype=np.float64)
@@ -444,6 +499,7 @@ class LocoManipulationController:
         plan = self.plan
         stance = (bool(plan.foot_stance(0, t)), bool(plan.foot_stance(1, t)))
         ref = plan.trunk_reference_at(t)
+        self._update_load(t, hand_load)
         mass_now = float(self.carried_mass(np.array([t]))[0])
         # Swing bookkeeping: remember where each swing started.
         for k in range(2):

@@ -277,7 +277,11 @@ class _Builder:
             touch = beside((ox, oy, gz), side * (half + k.HAND_RADIUS), lx, ly)
             grip = beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
             raised = (grip[0], grip[1], gz + phases.raise_height)
-            carry = (forward, side * (half - k.GRASP_SQUEEZE), k.CARRY_HEIGHT + lift)
+            # Carried no lower than it was raised: a box picked from a table higher than the
+            # carry pose would otherwise be lowered back towards that table's top while the
+            # robot turns or walks away from it (its corner caught the table's edge).
+            carry_z = max(k.CARRY_HEIGHT + lift, raised[2] - self.trunk.height)
+            carry = (forward, side * (half - k.GRASP_SQUEEZE), carry_z)
             w_pre = HandWaypoint(pre, "world")
             w_touch = HandWaypoint(touch, "world")
             w_grip = HandWaypoint(grip, "world")

@@ -351,7 +351,7 @@ class ClosedLoop:
                     if interrupt.signum:
                         raise Interrupted(interrupt.signum)
                     q, v = be.robot_qv()
-                    out = controller.step(t, q, v)
+                    out = controller.step(t, q, v, grasp.hand_load(d) if grasp.holds else None)
                     t_dynamics += out.dynamics_time_s
                     t_mpc += out.mpc_time_s
                     t_wbc += out.wbc_time_s
