@@ -136,10 +136,15 @@ YAW_ERROR_MIN: Final = math.radians(0.5)
 TRUNK_POSITION_ERROR: Final = 0.02
 # Sampling period of the clearance check (s).
 CLEARANCE_DT: Final = 0.01
-# Tucked hand pose of the LEFT hand in trunk (m): close to the body and wide, so that the hands
-# stay clear of what the robot turns or walks towards (within 0.185 m of the trunk
-# axis, inside a table's near edge 0.25 m away).
-HAND_TUCK_IN_TRUNK: Final = (0.08, 0.165, -0.05)
+# Tucked hand pose of the LEFT hand in trunk (m): close to the body and low, the forearms
+# hanging forward: with the trunk at its nominal 0.60 m the hand sphere's top is at 0.38 m,
+# below every table, platform and conveyor top of the envelope (0.40-0.55 m), and the hand
+# stays within 0.16 m of the trunk axis, inside the nearest edge of anything the robot turns
+# or walks towards (0.20 m). A tuck at table height (0.55 m) scraped tables 0.53 m high and
+# boxes standing 0.20 m to the side of the robot as it turned (envelope seed 1, transfer-002).
+HAND_TUCK_IN_TRUNK: Final = (0.06, 0.15, -0.24)
+# Time (s) to raise a tucked hand to the height of its reach target before reaching out.
+TUCK_LIFT_DURATION: Final = 0.3
 # Time to move a hand into the tucked pose (s), and how long before the first predicted
 # collision of the direct path the tuck is complete (s).
 TUCK_DURATION: Final = 0.4

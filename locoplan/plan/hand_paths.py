@@ -37,6 +37,17 @@ def tuck_waypoint(hand: int, width: float) -> HandWaypoint:
     return HandWaypoint((x, SIDE[hand] * width, z), "trunk")
 
 
+def lifted_tuck_waypoint(
+    hand: int, width: float, target: HandWaypoint, trunk: TrunkPath
+) -> HandWaypoint:
+    """The tucked pose raised to the height of `target` (in trunk: a "trunk" target's own z, a
+    "world" target's height above the planned trunk height): close to the body, where nothing
+    on a table is, at the height the reach then goes out level."""
+    z = target.point[2] if target.frame == "trunk" else target.point[2] - trunk.height
+    x, _, _ = k.HAND_TUCK_IN_TRUNK
+    return HandWaypoint((x, SIDE[hand] * width, z), "trunk")
+
+
 def initial_waypoint(
     hand: int, trunk: TrunkPath, obstacles: tuple[Obstacle, ...], until: float
 ) -> HandWaypoint:
@@ -181,10 +192,19 @@ def approach_segments(
             break
         tuck = tuck_waypoint(hand, tuck_y)
         w_tuck = HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")
-        n = int((t_end - k.REACH_MIN_DURATION - t_tuck1) / k.REACH_START_STEP + 1e-9)
+        # From the tucked pose (below table tops) the hand first rises close to the body to
+        # the target's height, then reaches out level: a straight line from below a table's
+        # top to a point above it would cut the table's near edge.
+        lifted = lifted_tuck_waypoint(hand, tuck_y, target, trunk)
+        t_first = t_tuck1 + k.TUCK_LIFT_DURATION
+        n = int((t_end - k.REACH_MIN_DURATION - t_first) / k.REACH_START_STEP + 1e-9)
         for j in range(n + 1):
-            t_r = t_tuck1 + j * k.REACH_START_STEP
-            cand = [w_tuck, HandSegment(t_r, t_end, tuck, target, task_index, "reach")]
+            t_r = t_first + j * k.REACH_START_STEP
+            cand = [
+                w_tuck,
+                HandSegment(t_r - k.TUCK_LIFT_DURATION, t_r, tuck, lifted, task_index, "lift"),
+                HandSegment(t_r, t_end, lifted, target, task_index, "reach"),
+            ]
             c = gap(cand, t_tuck0, t_end, threshold, give_up_below=best_gap)
             if c.first_below is None:
                 return cand
