@@ -213,7 +213,7 @@ class _FakeRay:
             def __init__(self, fn: Any) -> None:
                 pass
 
-            def remote(self, job: Job) -> _Ref:
+            def remote(self, job: Job, code: str | None = None) -> _Ref:
                 fake.submitted.append(job)
                 return _Ref(job)
 
@@ -263,6 +263,16 @@ def test_jobs_go_out_absolute_and_logs_come_back_as_given(tmp_path: Path) -> Non
     assert ray_backend._as_given(back, job).metrics == {"log": "runs/x/s0.mcap"}
     elsewhere = Outcome(job.job_id, "passed", {"log": "/elsewhere/s0.mcap"})
     assert ray_backend._as_given(elsewhere, job) == elsewhere
+
+
+def test_a_node_with_other_code_is_that_jobs_error(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    (job,) = _jobs(tmp_path, 1)
+    monkeypatch.setattr(ray_backend, "_worker_code", lambda: "b" * 64)
+    outcome = ray_backend._execute(job, "a" * 64)
+    assert outcome.status == "error"
+    assert "other locoplan code" in outcome.message and "aaaaaaaaaaaa" in outcome.message
 
 
 def test_workers_for() -> None:

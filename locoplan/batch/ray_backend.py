@@ -4,14 +4,17 @@ Used by `locoplan sweep --backend ray` and `locoplan batch --backend ray`. Each 
 (`num_cpus=1`, no retries) running `execute_job`, the function the local workers run, so a
 script or a point gives the same metrics on either backend. At most `workers` tasks are in
 flight, so `--jobs` bounds the cluster share a run takes. A task whose worker dies is that
-job's error; one past `timeout` is cancelled (forcefully: its worker is killed). Workers write
-their MCAP logs on their own node, where the driver's working directory may not exist: the
-jobs' paths are made absolute before they are sent, and on a cluster `--out` should be on a
-filesystem every node mounts. Ray reports no per-tick progress, only starts and ends.
+job's error; one past `timeout` is cancelled (forcefully: its worker is killed); one on a node
+whose locoplan code or library versions differ from the driver's (`cache.code_fingerprint`)
+is an error saying so, rather than results of other code. Workers write their MCAP logs on
+their own node, where the driver's working directory may not exist: the jobs' paths are made
+absolute before they are sent, and on a cluster `--out` should be on a filesystem every node
+mounts. Ray reports no per-tick progress, only starts and ends.
 """
 
 from __future__ import annotations
 
+import functools
 import logging
 import socket
 import time
@@ -73,7 +76,23 @@ def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
         ) from None
 
 
-def _execute(job: Job) -> Outcome:
+@functools.cache
+def _worker_code() -> str:
+    from locoplan.batch.cache import code_fingerprint
+
+    return code_fingerprint()
+
+
+def _execute(job: Job, code: str | None = None) -> Outcome:
+    """A Ray task: `execute_job`, after checking that this node runs the driver's code
+    (`code`: the driver's `code_fingerprint()`, None to skip the check)."""
+    if code is not None and _worker_code() != code:
+        message = (
+            f"the Ray worker on {socket.gethostname()} runs other locoplan code or library "
+            f"versions than the driver (code fingerprint {_worker_code()[:12]}, driver "
+            f"{code[:12]}); install the same locoplan and dependencies on every node"
+        )
+        return Outcome(job.job_id, "error", message=message)
     return execute_job(job)
 
 
@@ -129,7 +148,10 @@ def _run(
     listener: RunListener | None,
     fail_fast: bool = False,
 ) -> list[Outcome]:
+    from locoplan.batch.cache import code_fingerprint
+
     remote = ray.remote(num_cpus=1, max_retries=0)(_execute)
+    code = code_fingerprint()
     pending = list(jobs)
     pending.reverse()
     in_flight: dict[Any, tuple[Job, float]] = {}
@@ -157,7 +179,7 @@ def _run(
                 break
             while pending and len(in_flight) < workers:
                 job = pending.pop()
-                in_flight[remote.remote(_absolute(job))] = (job, time.monotonic())
+                in_flight[remote.remote(_absolute(job), code)] = (job, time.monotonic())
                 if listener is not None:
                     listener.started(job)
             ready, _ = ray.wait(list(in_flight), num_returns=1, timeout=POLL_INTERVAL)
