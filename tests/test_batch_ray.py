@@ -205,6 +205,7 @@ class _FakeRay:
         self.verdicts = verdicts
         self.submitted: list[Job] = []
         self.cancelled: list[str] = []
+        self.forced: list[bool] = []
 
     def remote(self, **_: Any) -> Any:
         fake = self
@@ -223,10 +224,13 @@ class _FakeRay:
         return refs[:num_returns], refs[num_returns:]
 
     def get(self, ref: _Ref) -> Outcome:
+        if ref.job.job_id in self.cancelled:
+            raise self.RayError("TaskCancelledError")
         return Outcome(ref.job.job_id, self.verdicts[ref.job.job_id])  # type: ignore[arg-type]
 
     def cancel(self, ref: _Ref, force: bool) -> None:
         self.cancelled.append(ref.job.job_id)
+        self.forced.append(force)
 
 
 def _jobs(tmp_path: Path, n: int) -> list[Job]:
@@ -252,6 +256,33 @@ def test_without_fail_fast_every_job_runs(tmp_path: Path) -> None:
     outcomes = ray_backend._run(fake, jobs, 2, None, None)
     assert [o.status for o in outcomes] == ["failed", "error", "passed"]
     assert fake.cancelled == []
+
+
+def test_a_signal_cancels_the_running_and_skips_the_rest(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from locoplan import interrupt
+
+    jobs = _jobs(tmp_path, 4)
+    fake = _FakeRay({job.job_id: "passed" for job in jobs})
+    real_wait = fake.wait
+    calls = 0
+
+    def wait(refs: list[_Ref], num_returns: int, timeout: float) -> tuple[list, list]:
+        nonlocal calls
+        calls += 1
+        if calls == 2:  # s0 done; a SIGTERM arrives while s1 and s2 run
+            monkeypatch.setattr(interrupt.STATE, "signum", 15)
+            return [], refs
+        return real_wait(refs, num_returns, timeout)
+
+    monkeypatch.setattr(fake, "wait", wait)
+    outcomes = ray_backend._run(fake, jobs, 2, None, None)
+    assert [o.status for o in outcomes] == ["passed", "skipped", "skipped", "skipped"]
+    # The running task is cancelled gently first (its worker closes the log).
+    assert fake.cancelled == ["s1.yaml", "s2.yaml"] and fake.forced == [False, False]
+    assert outcomes[1].message.startswith("interrupted (SIGTERM); Ray task cancelled")
+    assert outcomes[3].message == "not run (interrupted, SIGTERM)"
 
 
 def test_jobs_go_out_absolute_and_logs_come_back_as_given(tmp_path: Path) -> None:

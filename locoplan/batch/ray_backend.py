@@ -23,6 +23,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from locoplan import interrupt
 from locoplan.batch.errors import BackendUnavailable
 from locoplan.batch.job import Job, Outcome, RunListener
 from locoplan.batch.worker import execute_job
@@ -33,6 +34,8 @@ POLL_INTERVAL = 0.5
 # Seconds to wait for a TCP connection to a cluster's address before saying it is unreachable
 # (Ray itself retries for minutes, in native code that signals cannot interrupt).
 CONNECT_TIMEOUT = 5.0
+# Seconds the tasks get to close their MCAP logs after a signal before they are killed.
+TERMINATE_GRACE = 3.0
 
 
 def import_ray() -> Any:
@@ -167,44 +170,91 @@ def _run(
             stopping = True
 
     try:
-        while pending or in_flight:
-            if stopping:
-                for ref, (job, _) in list(in_flight.items()):
-                    ray.cancel(ref, force=True)
-                    del in_flight[ref]
-                    finish(Outcome(job.job_id, "skipped", message="stopped (--fail-fast)"))
-                while pending:
+        # A SIGINT / SIGTERM only sets locoplan.interrupt's flag here (the CLI installs its
+        # handlers): raised inside Ray's wait, it came out as a bare SystemExit(1).
+        with interrupt.deferring():
+            while pending or in_flight:
+                signum = interrupt.pending()
+                if signum:
+                    _stop_in_flight(ray, in_flight, finish, signum)
+                    why = f"not run (interrupted, {interrupt.signal_name(signum)})"
+                    while pending:
+                        finish(Outcome(pending.pop().job_id, "skipped", message=why))
+                    break
+                if stopping:
+                    for ref, (job, _) in list(in_flight.items()):
+                        ray.cancel(ref, force=True)
+                        del in_flight[ref]
+                        finish(Outcome(job.job_id, "skipped", message="stopped (--fail-fast)"))
+                    while pending:
+                        job = pending.pop()
+                        finish(Outcome(job.job_id, "skipped", message="not run (--fail-fast)"))
+                    break
+                while pending and len(in_flight) < workers:
                     job = pending.pop()
-                    finish(Outcome(job.job_id, "skipped", message="not run (--fail-fast)"))
-                break
-            while pending and len(in_flight) < workers:
-                job = pending.pop()
-                in_flight[remote.remote(_absolute(job), code)] = (job, time.monotonic())
-                if listener is not None:
-                    listener.started(job)
-            ready, _ = ray.wait(list(in_flight), num_returns=1, timeout=POLL_INTERVAL)
-            for ref in ready:
-                job, started = in_flight.pop(ref)
-                try:
-                    finish(_as_given(ray.get(ref), job))
-                except ray.exceptions.RayError as exc:
-                    message = f"Ray task failed: {type(exc).__name__}: {_first_line(exc)}"
-                    elapsed = time.monotonic() - started
-                    finish(Outcome(job.job_id, "error", message=message, wall_time=elapsed))
-            if timeout is None:
-                continue
-            now = time.monotonic()
-            for ref, (job, started) in list(in_flight.items()):
-                if now - started > timeout:
-                    ray.cancel(ref, force=True)
-                    del in_flight[ref]
-                    message = f"timed out after {timeout:g} s (--timeout); Ray task cancelled"
-                    finish(Outcome(job.job_id, "error", message=message, wall_time=now - started))
+                    in_flight[remote.remote(_absolute(job), code)] = (job, time.monotonic())
+                    if listener is not None:
+                        listener.started(job)
+                ready, _ = ray.wait(list(in_flight), num_returns=1, timeout=POLL_INTERVAL)
+                for ref in ready:
+                    job, started = in_flight.pop(ref)
+                    finish(_collect(ray, ref, job, started))
+                if timeout is not None:
+                    _cancel_late(ray, in_flight, finish, timeout)
     except BaseException:
         for ref in in_flight:
             ray.cancel(ref, force=True)
         raise
     return [outcomes[job.job_id] for job in jobs]
+
+
+def _collect(ray: Any, ref: Any, job: Job, started: float) -> Outcome:
+    """The outcome of a finished task; a task that failed in Ray (its worker died, it was
+    cancelled) is the job's error."""
+    try:
+        return _as_given(ray.get(ref), job)
+    except ray.exceptions.RayError as exc:
+        message = f"Ray task failed: {type(exc).__name__}: {_first_line(exc)}"
+        return Outcome(job.job_id, "error", message=message, wall_time=time.monotonic() - started)
+
+
+def _cancel_late(
+    ray: Any, in_flight: dict[Any, tuple[Job, float]], finish: Any, timeout: float
+) -> None:
+    """Cancel (forcefully) every task running longer than `timeout` s: that job's error."""
+    now = time.monotonic()
+    for ref, (job, started) in list(in_flight.items()):
+        if now - started > timeout:
+            ray.cancel(ref, force=True)
+            del in_flight[ref]
+            message = f"timed out after {timeout:g} s (--timeout); Ray task cancelled"
+            finish(Outcome(job.job_id, "error", message=message, wall_time=now - started))
+
+
+def _stop_in_flight(
+    ray: Any, in_flight: dict[Any, tuple[Job, float]], finish: Any, signum: int
+) -> None:
+    """After a signal: cancel the running tasks (a KeyboardInterrupt in each, so its MCAP log
+    is closed), give them `TERMINATE_GRACE` s, then cancel the rest forcefully. A task that
+    had finished keeps its outcome; the others are `skipped`, "interrupted"."""
+    refs = list(in_flight)
+    for ref in refs:
+        ray.cancel(ref, force=False)
+    done, late = (
+        ray.wait(refs, num_returns=len(refs), timeout=TERMINATE_GRACE) if refs else ([], [])
+    )
+    for ref in late:
+        ray.cancel(ref, force=True)
+    name = interrupt.signal_name(signum)
+    for ref in refs:
+        job, started = in_flight.pop(ref)
+        outcome = _collect(ray, ref, job, started) if ref in done else None
+        if outcome is None or outcome.status == "error":
+            log = Path(job.options.out_dir) / f"{job.options.log_name or job.name}.mcap"
+            message = f"interrupted ({name}); Ray task cancelled, log up to there: {log}"
+            outcome = Outcome(job.job_id, "skipped", message=message,
+                              wall_time=time.monotonic() - started)  # fmt: skip
+        finish(outcome)
 
 
 def _absolute(job: Job) -> Job:
