@@ -90,15 +90,15 @@ def run_sweep(
     return the outcomes by job id. Raises BackendUnavailable when Ray is missing or cannot
     start, ValueError for an unknown backend."""
     from locoplan.batch.batch import write_metrics
-    from locoplan.batch.pool import default_workers, run_local
+    from locoplan.batch.pool import run_local
 
     if backend == "local":
         outcomes = run_local(jobs, workers, timeout, listener)
     elif backend == "ray":
-        from locoplan.batch.ray_backend import run_ray
+        from locoplan.batch.ray_backend import run_ray, workers_for
 
-        n = workers or (len(jobs) if address is not None else default_workers())
-        outcomes = run_ray(jobs, max(1, n), address, timeout, listener)
+        n = workers_for(len(jobs), workers, address)
+        outcomes = run_ray(jobs, n, address, timeout, listener)
     else:
         raise ValueError(f"unknown backend '{backend}'; allowed: {', '.join(BACKENDS)}")
     by_id = {job.job_id: job for job in jobs}

@@ -165,7 +165,8 @@ def _exit_if_interrupted(results: list[Any], out_dir: object) -> None:
 
 
 def _check_backend(backend: str, address: str | None) -> None:
-    """Exit 2 (nothing run) for an unknown --backend, --address without Ray, or Ray missing."""
+    """Exit 2 (nothing run) for an unknown --backend, --address without --backend ray, Ray
+    missing, or a cluster address that accepts no connection."""
     from locoplan.batch import BACKENDS, BackendUnavailable
 
     if backend not in BACKENDS:
@@ -173,10 +174,12 @@ def _check_backend(backend: str, address: str | None) -> None:
     if address is not None and backend != "ray":
         _fail(EXIT_BAD_INPUT, "--address needs --backend ray")
     if backend == "ray":
-        from locoplan.batch.ray_backend import import_ray
+        from locoplan.batch.ray_backend import check_reachable, import_ray
 
         try:
             import_ray()
+            if address is not None:
+                check_reachable(address)
         except BackendUnavailable as exc:
             _fail(EXIT_BAD_INPUT, str(exc))
 
@@ -185,6 +188,8 @@ def _check_backend(backend: str, address: str | None) -> None:
 def batch_command(
     paths: list[str] = _BATCH_PATHS,
     jobs: int | None = _BATCH_JOBS,
+    backend: str = _BACKEND,
+    address: str | None = _ADDRESS,
     junit: str | None = typer.Option(
         None,
         "--junit",
@@ -226,6 +231,12 @@ def batch_command(
     same DIR is not simulated again; its stored metrics are reported and
     marked 'cached' (entries in DIR/.cache; --no-cache runs everything).
 
+    --backend ray runs the scripts as Ray tasks instead, one CPU each, on
+    the cluster at --address or on a local Ray started for the batch: the
+    same validation, table, JUnit report, cache and exit status; a task
+    whose worker dies, or that runs past --timeout (cancelled), is that
+    script's error. On a cluster, give --out a folder every node mounts.
+
     Exit status: 0 every script passed, 1 any failed or errored, 2 a bad
     command line (no scripts found, a missing path, a bad option),
     130 interrupted (Ctrl-C), 143 terminated (SIGTERM): the running scripts
@@ -239,6 +250,8 @@ def batch_command(
       locoplan batch scenarios/ more/*.yaml --jobs 4 --timeout 120 --no-cache
 
       locoplan batch scenarios/stand.yaml scenarios/step.yaml --fail-fast
+
+      locoplan batch scenarios/ --backend ray --address auto --junit report.xml
     """
     import time
     from pathlib import Path
@@ -246,6 +259,7 @@ def batch_command(
     from locoplan import interrupt
     from locoplan.batch import (
         CACHE_DIRNAME,
+        BackendUnavailable,
         BatchInputError,
         batch_exit_code,
         default_workers,
@@ -255,6 +269,7 @@ def batch_command(
     )
     from locoplan.report.batch_table import batch_table
 
+    _check_backend(backend, address)
     out_path = Path(out_dir)
     try:
         cases = prepare_batch(paths, out_path, use_cache=not no_cache, max_sim_time=max_sim_time)
@@ -270,15 +285,22 @@ def batch_command(
                 cache_dir=None if no_cache else out_path / CACHE_DIRNAME,
                 listener=progress,
                 fail_fast=fail_fast,
+                backend=backend,
+                address=address,
             )
+    except BackendUnavailable as exc:
+        _fail(EXIT_BAD_INPUT, str(exc))
     except (KeyboardInterrupt, SystemExit) as exc:
         if debug or interrupt.interruption(exc) is None:
             raise
         _interrupted(exc, f"the logs written so far are in {out_dir}")
     _print_table(batch_table(results))
-    workers = jobs or default_workers()
     elapsed = time.perf_counter() - started
-    err.print(f"{len(results)} scripts in {elapsed:.1f} s on {workers} workers", markup=False)
+    if backend == "ray":
+        where = f"Ray ({'cluster at ' + address if address else 'a local Ray'})"
+    else:
+        where = f"{jobs or default_workers()} workers"
+    err.print(f"{len(results)} scripts in {elapsed:.1f} s on {where}", markup=False)
     _exit_if_interrupted(results, out_dir)
     if junit is not None:
         try:
