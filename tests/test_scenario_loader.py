@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 import textwrap
 from pathlib import Path
@@ -212,3 +213,23 @@ def test_repick_after_drop_and_file_order_do_not_matter() -> None:
     s = load_scenario(DATA / "good" / "repick-and-throw.yaml")
     picks = [t for t in s.tasks if isinstance(t, PickTask)]
     assert [p.hands for p in picks] == ["both", "left"]
+
+
+def test_a_relative_robot_path_is_resolved_beside_the_script(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The robot file is named relative to the script's folder; run, compare, render and batch
+    # workers load it later from whatever working directory they have.
+    from locoplan.robot.description import load_robot_description
+
+    robot_yaml = Path(__file__).resolve().parents[1] / "robots" / "hector" / "robot.yaml"
+    script = tmp_path / "scripts" / "s.yaml"
+    script.parent.mkdir()
+    rel = os.path.relpath(robot_yaml, script.parent)
+    script.write_text(
+        f"version: 1\nname: rel\nrobot: {rel}\ntasks:\n  - {{action: stand, start: 0, duration: 1}}\n"
+    )
+    loaded = load_scenario_file(script)
+    assert Path(loaded.scenario.robot).is_absolute()
+    monkeypatch.chdir(tmp_path)
+    assert load_robot_description(loaded.scenario.robot).name == "hector"

@@ -126,6 +126,13 @@ def load_scenario_file(source: str | Path, text: str | bytes | None = None) -> L
     if located:
         raise ScenarioError(_capped([place(issue) for issue in located], untranslated))
     assert scenario is not None  # no issue means validation succeeded
+    if scenario.robot not in BUILTIN_ROBOTS:
+        # A relative robot path names a file beside the script: make it absolute, so that
+        # whoever loads the robot later (run, compare, render, batch workers) finds the same
+        # file whatever their working directory.
+        base = src.path.parent if src.path is not None else None
+        absolute = str(resolve_robot_path(scenario.robot, base).resolve())
+        scenario = scenario.model_copy(update={"robot": absolute})
     return LoadedScenario(scenario, src.path, src.text)
 
 
