@@ -227,7 +227,8 @@ def test_a_relative_robot_path_is_resolved_beside_the_script(
     script.parent.mkdir()
     rel = os.path.relpath(robot_yaml, script.parent)
     script.write_text(
-        f"version: 1\nname: rel\nrobot: {rel}\ntasks:\n  - {{action: stand, start: 0, duration: 1}}\n"
+        f"version: 1\nname: rel\nrobot: {rel}\n"
+        "tasks:\n  - {action: stand, start: 0, duration: 1}\n"
     )
     loaded = load_scenario_file(script)
     assert Path(loaded.scenario.robot).is_absolute()
