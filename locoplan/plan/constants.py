@@ -143,6 +143,13 @@ CLEARANCE_DT: Final = 0.01
 # or walks towards (0.20 m). A tuck at table height (0.55 m) scraped tables 0.53 m high and
 # boxes standing 0.20 m to the side of the robot as it turned (envelope seed 1, transfer-002).
 HAND_TUCK_IN_TRUNK: Final = (0.06, 0.15, -0.24)
+# Peak hand acceleration (m/s^2) of the moves that follow a release (opening, retreat). Both
+# arms accelerating together push the trunk with about 2 x 0.5 kg x a (upper arm and forearm
+# share), at about 0.55 m above the soles; the line feet answer a pitch moment of at most about
+# 0.06 m x the weight (167 N): 10 N m, so a <= 0.5 x 10 / (0.55 x 1 kg) = 9 m/s^2 keeps half of
+# it for balance. Retreats of 0.35 m in 0.28 s (26 m/s^2) and openings of 4 cm in 0.07 s
+# (47 m/s^2) saturated the shoulders and tipped the robot after the release (envelope seed 1).
+HAND_ACCEL_LIMIT: Final = 9.0
 # Time (s) to raise a tucked hand to the height of its reach target before reaching out.
 TUCK_LIFT_DURATION: Final = 0.3
 # Time to move a hand into the tucked pose (s), and how long before the first predicted

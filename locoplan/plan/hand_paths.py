@@ -37,6 +37,13 @@ def tuck_waypoint(hand: int, width: float) -> HandWaypoint:
     return HandWaypoint((x, SIDE[hand] * width, z), "trunk")
 
 
+def rest_to_rest_duration(distance: float) -> float:
+    """Shortest duration (s) of a rest-to-rest hand move over `distance` (m) whose peak
+    acceleration, 10 / sqrt(3) d / T^2 for the tracks' quintic, stays within
+    HAND_ACCEL_LIMIT."""
+    return math.sqrt(10.0 / math.sqrt(3.0) * max(distance, 0.0) / k.HAND_ACCEL_LIMIT)
+
+
 def lifted_tuck_waypoint(
     hand: int, width: float, target: HandWaypoint, trunk: TrunkPath
 ) -> HandWaypoint:

@@ -50,8 +50,10 @@ from locoplan.plan.hand_paths import (
     default_waypoint,
     grip_height,
     initial_waypoint,
+    rest_to_rest_duration,
     retreat_segments,
     throw_line,
+    tuck_waypoint,
     world_to_trunk,
 )
 from locoplan.plan.hands import HandSegment, HandTrack, HandWaypoint, Vec3, make_track
@@ -163,6 +165,8 @@ class _Builder:
     drift: dict[str, tuple[tuple[float, float], float]] = field(default_factory=dict)
     targets: dict[str, ObjectTarget] = field(default_factory=dict)
     events: list[PlanEvent] = field(default_factory=list)
+    # When each hand's last retreat ends (s): it may outlast its drop.
+    retreat_end: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     initial: tuple[HandWaypoint, HandWaypoint] = field(
         default_factory=lambda: (default_waypoint(0), default_waypoint(1))
     )
@@ -225,6 +229,18 @@ class _Builder:
             if t.action == "pick" and hands & set(_HANDS_OF[t.hands or "both"]):
                 return t.start
         return math.inf
+
+    def next_hand_use(self, hand: int, after: float) -> float:
+        """Start (s) of the first manipulation task starting at or after `after` that may use
+        `hand` (inf if none)."""
+        starts = [
+            t.start
+            for t in self.tasks
+            if t.action in ("pick", "drop", "throw")
+            and t.start >= after - 1e-9
+            and hand in _HANDS_OF[t.hands or "both"]
+        ]
+        return min(starts, default=math.inf)
 
     def obstacles(self) -> tuple[Obstacle, ...]:
         """Fixtures and every object not held now, where the plan has put them so far."""
@@ -359,7 +375,7 @@ class _Builder:
         )
         for h in hold.hands:
             self.contacts[h].append(HandContact(HAND_NAMES[h], hold.obj, hold.grasp, t_release))
-            self.active[h].append((task.start, task.end))
+            self.active[h].append((task.start, max(task.end, self.retreat_end[h])))
             self.hand_holds[h] = None
         del self.open_holds[hold.obj]
         self.events.append(PlanEvent(t_release, "release", task.index, hold.obj))
@@ -419,11 +435,23 @@ class _Builder:
             w_back = HandWaypoint(back, "world")
             self.add(h, HandSegment(task.start, t_hover, self.current(h), w_hover, i, "hover"))
             self.add(h, HandSegment(t_hover, t_release, w_hover, w_put, i, "lower"))
-            self.add(h, HandSegment(t_release, t_open, w_put, w_open, i, "open"))
+            # Opening and retreat no faster than the feet can answer the arms' reaction
+            # (rest_to_rest_duration); the retreat may run past the drop's end while the
+            # hands have nothing else to do.
+            h_open = max(t_open, t_release + rest_to_rest_duration(math.dist(put, opened)))
+            self.add(h, HandSegment(t_release, h_open, w_put, w_open, i, "open"))
+            tuck = tuck_waypoint(h, k.HAND_TUCK_IN_TRUNK[1]).point
+            opened_in_trunk = world_to_trunk(self.trunk, h_open, opened)
+            # The retreat goes back along the object first when a straight one would pass
+            # close to it: up to about 1.4 times the straight distance.
+            span = 1.4 * math.dist(opened_in_trunk, tuck)
+            h_end = max(task.end, h_open + rest_to_rest_duration(span))
+            h_end = max(min(h_end, self.next_hand_use(h, task.end)), task.end, h_open + 0.05)
             for seg in retreat_segments(
-                h, self.segments[h], i, t_open, task.end, w_open, w_back, self.trunk, obstacles
+                h, self.segments[h], i, h_open, h_end, w_open, w_back, self.trunk, obstacles
             ):
                 self.add(h, seg)
+            self.retreat_end[h] = h_end
         self._close_hold(hold, task, t_release, "drop")
         self.state[name] = (tx, ty, tz, obj_yaw)
         if drift != (0.0, 0.0):
