@@ -17,21 +17,17 @@ Palms. The point connections leave a box free to turn about the line through the
 walks, and their swing shook the robot. Real hands press the box between two palms, whose
 contact patches transmit a torsional friction torque about that axis. `GraspManager.palm_torques`
 models it: while two hands hold an object, a rotational spring-damper about the grip axis keeps
-the object at the orientation it had relative to the hands (forearm bodies) at the grasp,
-(the robot's wrists, which HECTOR's 3-DoF arms lack, would keep a held box's attitude; the bond
-keeps it relative to the trunk, so a box picked level stays level whatever the elbows do),
-critically damped at PALM_BOND_FREQUENCY for the object's own inertia about the axis, and
+the object at the orientation it had relative to the trunk at the grasp (wrists, which HECTOR's
+3-DoF arms lack, would keep a held box's attitude; so a box picked level stays level whatever
+the elbows do), critically damped at PALM_BOND_FREQUENCY for the object's own inertia about the axis, and
 capped at the palms' friction limit (4/3) m g r_palm: each palm squeezes with N = m g / mu, twice
 what holding the weight by friction needs, and a uniformly pressed disc of radius r_palm
 transmits (2/3) mu N r_palm. The cap exceeds the largest gravity torque of a held box (gripped
 at most GRASP_ABOVE_CENTRE = 0.04 m off its centre) for any mass, so a held box hangs level and
 swings only as far as an inertial torque beyond the cap pushes it. The reaction goes to the
-two hand bodies in equal halves, so momentum is conserved. The bond acts on boxes gripped above
-their centre, which the plan does for boxes carried through a walk, turn or steps (their
-pendulum is what the robot's motion excites). A box held standing is gripped at its centre and
-left to the point grips: with the bond, the 14 kg standing hold could no longer lift its block
-(the bond's reaction on the arms, which the WBC does not model, used up the shoulder and elbow
-margins); measured on 40 envelope scripts (seed 1), the bond changed the success count by one.
+two hand bodies in equal halves, so momentum is conserved. The bond acts on every object held
+by two hands: without it the 14 kg standing hold pitched its block 35-60 deg in the grasp and,
+once the robot's retreat from the table began, fell forward; with it the block stays level.
 
 Conveyor. A belt moving at `speed` along the conveyor's own x axis drags objects resting on it
 by friction: a horizontal force c m (v_belt - v_object), clamped to mu m g, while the object
@@ -115,7 +111,7 @@ class GraspManager:
             data.xfrc_applied[bid, 3:6] = 0.0
         self._palm_bodies.clear()
         for hs in self.holds:
-            if hs.state != "grasped" or len(hs.hands) != 2 or hs.hold.grip_height <= 0.0:
+            if hs.state != "grasped" or len(hs.hands) != 2:
                 continue
             name = hs.hold.object
             refs = self._palm_refs.get(name)
