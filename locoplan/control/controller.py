@@ -50,6 +50,7 @@ from locoplan.robot.description import RobotDescription
 from locoplan.robot.pinocchio_model import PinocchioRobot
 
 FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
 
 GRAVITY = 9.81
 LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (goes off)
@@ -177,7 +178,11 @@ class LocoManipulationController:
         # offset (kg) of the measurement from the plan's load now.
         self._load_filtered: float | None = None
         self._load_offset = 0.0
+        self._shift_offset = 0.0
         self._load_t = -math.inf
+        self._mass_wbc: float | None = None
+        self._mass_mpc = 0.0
+        self._hold_mass = sum(h.mass for h in plan.holds)
         # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
         self._cols_leg = [np.arange(6, 11), np.arange(11, 16)]
         self._cols_arm = [np.arange(16, 19), np.arange(19, 22)]
@@ -299,7 +304,7 @@ class LocoManipulationController:
         # The held-load CoM shift now and at the horizon's steps (lead times t + LOAD_LEAD and
         # times + LOAD_LEAD) joins the same evaluation when a load is on.
         t_lead = np.concatenate([[t], times]) + LOAD_LEAD
-        mass_lead = self.carried_mass(t_lead)
+        mass_lead = self.shift_mass(t_lead)
         loaded = bool(np.any(mass_lead > 0.0))
         n_td = len(keys)
         eval_times = np.concatenate(
@@ -407,24 +412,52 @@ class LocoManipulationController:
             a = dt / (LOAD_FILTER_TAU + dt)
             self._load_filtered += a * (raw - self._load_filtered)
         self._load_t = t
-        planned = float(self._planned_mass(np.array([t]))[0])
-        self._load_offset = self._load_filtered - planned
+        now = np.array([t])
+        planned = float(self._planned_mass(now)[0])
+        window, top = self._hold_window(now, 0.0)
+        measured = min(self._load_filtered, float(top[0])) if window[0] else planned
+        self._mass_wbc = measured
+        # The load the CoM shift is computed for may fall no faster than the plan's own ramp:
+        # a release drops the measured load at once, and a CoM reference that jumped forward
+        # by the lean it had against the load tipped the robot onto its toes 0.2-0.4 s later
+        # (pick-walk-drop). The MPC's force model takes the measured load as it is.
+        dt = max(0.0, t - self._load_t) if math.isfinite(self._load_t) else 0.0
+        fall = self._hold_mass / LOAD_RAMP_DOWN * dt
+        self._mass_mpc = max(measured, self._mass_mpc - fall)
+        self._load_offset = measured - planned
+        self._shift_offset = self._mass_mpc - planned
+        self._load_t = t
 
-    def carried_mass(self, times: FloatArray) -> FloatArray:
-        """Mass (kg) the controller takes the hands to carry at `times` (n,): the plan's load
-        (`_planned_mass`) corrected by the measured hand load (`_update_load`) while the plan
-        has an object between the hands (grasp to release)."""
-        planned = self._planned_mass(times)
-        if self._load_offset == 0.0:
-            return planned
-        t = np.asarray(times, dtype=float)
+    def _hold_window(self, t: FloatArray, extra: float) -> tuple[BoolArray, FloatArray]:
+        """Whether the plan has an object between the hands at each time in t (from its grasp
+        to `extra` s after its release) and the mass (kg) it then has there."""
         window = np.zeros(t.shape, dtype=bool)
         top = np.zeros(t.shape)
         for h in self.plan.holds:
-            inside = (t >= h.grasp) & (t < h.release)
+            inside = (t >= h.grasp) & (t < h.release + extra)
             window |= inside
             top = np.where(inside, top + h.mass, top)
-        corrected = np.clip(planned + self._load_offset, 0.0, top)
+        return window, top
+
+    def carried_mass(self, times: FloatArray) -> FloatArray:
+        """Mass (kg) the MPC's force model takes the hands to carry at `times` (n,): the plan's
+        load (`_planned_mass`) corrected by the measured hand load (`_update_load`) while the
+        plan has an object between the hands (grasp to release)."""
+        return self._corrected(times, self._load_offset, 0.0)
+
+    def shift_mass(self, times: FloatArray) -> FloatArray:
+        """Mass (kg) the held-load CoM shift is computed for at `times` (n,): as
+        `carried_mass`, but falling no faster than LOAD_RAMP_DOWN allows, also after the
+        release."""
+        return self._corrected(times, self._shift_offset, LOAD_RAMP_DOWN)
+
+    def _corrected(self, times: FloatArray, offset: float, extra: float) -> FloatArray:
+        planned = self._planned_mass(times)
+        if offset == 0.0:
+            return planned
+        t = np.asarray(times, dtype=float)
+        window, top = self._hold_window(t, extra)
+        corrected = np.clip(planned + offset, 0.0, top)
         return np.where(window, corrected, planned)
 
     def _planned_mass(self, times: FloatArray) -> FloatArray:
@@ -501,6 +534,8 @@ class LocoManipulationController:
         ref = plan.trunk_reference_at(t)
         self._update_load(t, hand_load)
         mass_now = float(self.carried_mass(np.array([t]))[0])
+        # The WBC's object feed-forward: the measured load now (the hands let go at once).
+        mass_wbc = mass_now if self._mass_wbc is None else self._mass_wbc
         # Swing bookkeeping: remember where each swing started.
         for k in range(2):
             if not stance[k] and self._last_contact[k]:
@@ -568,7 +603,7 @@ class LocoManipulationController:
         p_hands = p_fr[2:4]
         v_hands = v_fr[2:4, :3]
         hand_acc = self._hand_kp * (hand_targets - p_hands) + self._hand_kd * (v_hand_des - v_hands)
-        tau_ext = self._object_generalized_force(t, mass_now, J_hands, hand_acc)
+        tau_ext = self._object_generalized_force(t, mass_wbc, J_hands, hand_acc)
 
         t_w = time.perf_counter()
         wbc_out: WbcOutput | None = None

@@ -53,6 +53,7 @@ def place_on_fixture(
     robot_yaw: float,
     task_index: int,
     iterations: int = 4,
+    travel: float = 0.0,
 ) -> tuple[tuple[float, float, float], float]:
     """Where to put the object's centre on the fixture's top: (x, y, z) world (m) and the
     object's yaw there (rad).
@@ -62,6 +63,12 @@ def place_on_fixture(
     inside the top; among those centres the one nearest the robot's planned position is
     taken. Because the yaw depends on the target and the target on the footprint, a few
     fixed-point iterations are run, starting from the fixture's centre.
+
+    `travel` (m, signed along the fixture's own x axis) is how far a conveyor's belt carries
+    the object after the release until the run ends: the centre is then chosen among those
+    from which it is still supported after that travel (nearest the robot), so that what is
+    put on a belt is on the belt at the end; a belt too short for that takes it at its
+    upstream end.
     """
     fx, fy = fixture.position[0], fixture.position[1]
     fyaw = math.radians(fixture.yaw)
@@ -89,7 +96,12 @@ def place_on_fixture(
             )
         # Robot position in the fixture frame, clamped into the allowed rectangle.
         rx, ry = robot_x - fx, robot_y - fy
-        u = min(max(fc * rx + fs * ry, -lim_x), lim_x)
+        lo_x, hi_x = -lim_x, lim_x
+        if travel > 0.0:
+            hi_x = max(lo_x, lim_x - travel)
+        elif travel < 0.0:
+            lo_x = min(hi_x, -lim_x - travel)
+        u = min(max(fc * rx + fs * ry, lo_x), hi_x)
         v = min(max(-fs * rx + fc * ry, -lim_y), lim_y)
         tx, ty = fx + fc * u - fs * v, fy + fs * u + fc * v
     ax_, ay_ = approach_direction(robot_x, robot_y, tx, ty, robot_yaw)

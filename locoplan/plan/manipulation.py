@@ -165,6 +165,8 @@ class _Builder:
     drift: dict[str, tuple[tuple[float, float], float]] = field(default_factory=dict)
     targets: dict[str, ObjectTarget] = field(default_factory=dict)
     events: list[PlanEvent] = field(default_factory=list)
+    # When the run ends (s): how long a belt carries what is put on it.
+    t_end: float = math.inf
     # When each hand's last retreat ends (s): it may outlast its drop.
     retreat_end: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     initial: tuple[HandWaypoint, HandWaypoint] = field(
@@ -394,8 +396,19 @@ class _Builder:
             if fixture is None:
                 known = ", ".join(sorted(self.scenario.fixtures)) or "none"
                 raise PlanError(f"unknown fixture '{task.onto}' (declared: {known})", task.index)
+            travel = 0.0
+            if fixture.kind == "conveyor" and fixture.speed and math.isfinite(self.t_end):
+                travel = fixture.speed * max(0.0, self.t_end - t_release)
             target, _ = place_on_fixture(
-                task.onto, fixture, obj, hold.yaw_in_grasp, rx, ry, ryaw, task.index
+                task.onto,
+                fixture,
+                obj,
+                hold.yaw_in_grasp,
+                rx,
+                ry,
+                ryaw,
+                task.index,
+                travel=travel,
             )
         else:
             assert task.at is not None  # DropTask validates: exactly one of onto/at
@@ -567,7 +580,8 @@ def build_manipulation(
     tasks: tuple[PlannedTask, ...], scenario: Scenario, trunk: TrunkPath
 ) -> ManipulationPlan:
     """Hand tracks, contacts, object holds and targets for the sorted planned tasks."""
-    b = _Builder(scenario, trunk, tasks)
+    shift = max((t.shift for t in tasks), default=0.0)
+    b = _Builder(scenario, trunk, tasks, t_end=scenario.end_time + shift)
     for task in tasks:
         if task.action == "pick":
             b.pick(task)

@@ -12,22 +12,23 @@ planned release instant (drop or throw) the welds are switched off. If the hands
 there by GRASP_WINDOW after the planned lift-off, the grasp fails (an event, and the object
 stays where it is), which the metrics turn into a failed pick.
 
-Palms. The point connections leave a box free to turn about the line through the two hands
-(the grip axis), and nothing in them damps it: carried boxes swung 20-60 deg in loaded turns and
+Palms. The point connections leave a box free to turn about the line through the two hands (the
+grip axis), and nothing in them damps it: carried boxes swung 20-60 deg in loaded turns and
 walks, and their swing shook the robot. Real hands press the box between two palms, whose
-contact patches transmit a torsional friction torque about that axis. `GraspManager.palm_torques`
-models it: while two hands hold an object, a rotational spring-damper about the grip axis keeps
-the object at the orientation it had relative to the trunk at the grasp (wrists, which HECTOR's
-3-DoF arms lack, would keep a held box's attitude; so a box picked level stays level whatever
-the elbows do), critically damped at PALM_BOND_FREQUENCY for the object's own inertia about the axis, and
-capped at the palms' friction limit (4/3) m g r_palm: each palm squeezes with N = m g / mu, twice
-what holding the weight by friction needs, and a uniformly pressed disc of radius r_palm
-transmits (2/3) mu N r_palm. The cap exceeds the largest gravity torque of a held box (gripped
-at most GRASP_ABOVE_CENTRE = 0.04 m off its centre) for any mass, so a held box hangs level and
-swings only as far as an inertial torque beyond the cap pushes it. The reaction goes to the
-two hand bodies in equal halves, so momentum is conserved. The bond acts on every object held
-by two hands: without it the 14 kg standing hold pitched its block 35-60 deg in the grasp and,
-once the robot's retreat from the table began, fell forward; with it the block stays level.
+contact patches transmit a torsional friction torque about that axis.
+`GraspManager.palm_torques` models it: while two hands hold an object, a rotational spring-
+damper about the grip axis keeps the object at the orientation it had relative to the trunk at
+the grasp (wrists, which HECTOR's 3-DoF arms lack, would keep a held box's attitude; so a box
+picked level stays level whatever the elbows do), critically damped at PALM_BOND_FREQUENCY for
+the object's own inertia about the axis, and capped at the palms' friction limit (4/3) m g
+r_palm: each palm squeezes with N = m g / mu, twice what holding the weight by friction needs,
+and a uniformly pressed disc of radius r_palm transmits (2/3) mu N r_palm. The cap exceeds the
+largest gravity torque of a held box (gripped at most GRASP_ABOVE_CENTRE = 0.04 m off its
+centre) for any mass, so a held box hangs level and swings only as far as an inertial torque
+beyond the cap pushes it. The reaction goes to the two hand bodies in equal halves, so momentum
+is conserved. The bond acts on every object held by two hands: without it the 14 kg standing
+hold pitched its block 35-60 deg in the grasp and, once the robot's retreat from the table
+began, fell forward; with it the block stays level.
 
 Conveyor. A belt moving at `speed` along the conveyor's own x axis drags objects resting on it
 by friction: a horizontal force c m (v_belt - v_object), clamped to mu m g, while the object
@@ -119,13 +120,6 @@ class GraspManager:
                 continue
             ob = self.scene.object_body_ids[name]
             hands = [self.scene.hand_body_ids[k] for k in hs.hands]
-            p0 = data.site_xpos[self._hand_sites[hs.hands[0]]]
-            p1 = data.site_xpos[self._hand_sites[hs.hands[1]]]
-            axis = p0 - p1
-            n = float(np.linalg.norm(axis))
-            if n < 1e-6:
-                continue
-            axis /= n
             R_obj = data.xmat[ob].reshape(3, 3)
             tb = self._trunk_body
             R_des = data.xmat[tb].reshape(3, 3) @ refs
@@ -133,18 +127,19 @@ class GraspManager:
             mujoco.mju_mat2Quat(quat, (R_obj @ R_des.T).reshape(9))
             err = np.zeros(3)
             mujoco.mju_quat2Vel(err, quat, 1.0)
-            angle = float(err @ axis)
-            rate = float((data.cvel[ob, 0:3] - data.cvel[tb, 0:3]) @ axis)
-            # The object's inertia about the grip axis (principal inertia in the body frame).
+            rate = data.cvel[ob, 0:3] - data.cvel[tb, 0:3]
+            # The object's inertia tensor in the world frame (principal axes R_i).
             R_i = data.ximat[ob].reshape(3, 3)
-            inertia = float(np.sum(m.body_inertia[ob] * (R_i.T @ axis) ** 2))
+            inertia = R_i @ np.diag(m.body_inertia[ob]) @ R_i.T
             w = PALM_BOND_FREQUENCY
-            torque = -(inertia * w * w * angle + 2.0 * inertia * w * rate)
+            torque = -(inertia @ (w * w * err + 2.0 * w * rate))
             cap = (4.0 / 3.0) * float(m.body_mass[ob]) * GRAVITY * PALM_RADIUS
-            torque = min(max(torque, -cap), cap)
-            data.xfrc_applied[ob, 3:6] = torque * axis
+            size = float(np.linalg.norm(torque))
+            if size > cap:
+                torque *= cap / size
+            data.xfrc_applied[ob, 3:6] = torque
             for hb in hands:
-                data.xfrc_applied[hb, 3:6] -= 0.5 * torque * axis
+                data.xfrc_applied[hb, 3:6] -= 0.5 * torque
                 self._palm_bodies.add(hb)
             self._palm_bodies.add(ob)
 

@@ -160,7 +160,15 @@ def _on_fixture(scenario: Scenario, name: str, p: np.ndarray, fixture: str) -> b
     c, s = math.cos(math.radians(f.yaw)), math.sin(math.radians(f.yaw))
     dx, dy = p[0] - f.position[0], p[1] - f.position[1]
     lx, ly = c * dx + s * dy, -s * dx + c * dy
-    inside = abs(lx) <= f.size[0] / 2 and abs(ly) <= f.size[1] / 2
+    reach_x = f.size[0] / 2
+    if f.kind == "conveyor" and f.speed:
+        # A belt delivers what it carries over its downstream end: an object riding off that
+        # end at belt height (its footprint still partly on the belt) is on the conveyor.
+        ahead = spec.size[0] if spec.shape == "sphere" else 0.5 * max(spec.size[0], spec.size[1])
+        inside_x = -reach_x <= lx * math.copysign(1.0, f.speed) <= reach_x + ahead
+    else:
+        inside_x = abs(lx) <= reach_x
+    inside = inside_x and abs(ly) <= f.size[1] / 2
     return inside and abs(p[2] - half_h - f.size[2]) <= ON_FIXTURE_TOL
 
 
