@@ -1,0 +1,75 @@
+"""A fixed sample of generated envelope scripts, one per family, run closed loop in MuJoCo and
+asserted from the simulation state (no fall, torques within limits, objects where expected).
+
+This is a regression sample, not the success-rate measurement: `benchmarks/envelope.py`
+measures the envelope (README, "Envelope"). The scripts are drawn by `generate_suite(80, 1)`
+(seed 1, the seed the planner was tuned on) and are ones that succeeded when this test was
+written; a change that makes one of them fall is a regression to look at in its log.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from locoplan.envelope import generate_suite
+from locoplan.scenario import load_scenario_file
+from locoplan.sim.run import RunOptions, run_scenario
+
+pytestmark = pytest.mark.closed_loop
+
+SAMPLE = (
+    "transfer-000",
+    "standing-hold-001",
+    "walk-carry-001",
+    "side-carry-000",
+    "locomotion-001",
+    "throw-001",
+)
+
+
+@pytest.fixture(scope="module")
+def suite() -> dict[str, str]:
+    return {s.name: s.text for s in generate_suite(80, 1)}
+
+
+@pytest.mark.parametrize("name", SAMPLE)
+def test_generated_script_succeeds(tmp_path: Path, suite: dict[str, str], name: str) -> None:
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(suite[name])
+    loaded = load_scenario_file(path)
+    result = run_scenario(loaded.scenario, loaded.text, RunOptions(out_dir=tmp_path))
+    m = result.metrics
+    assert not m["fell"], m["expectations"]
+    assert m["peak_torque_ratio"] <= 1.0
+    for obj, fixture in (loaded.scenario.expect.placed or {}).items():
+        assert m["objects"][obj]["on"] == fixture, m["objects"]
+    assert m["passed"], m["expectations"]
+
+
+DATA = Path(__file__).parent / "data" / "envelope"
+# Issue 12's four example scripts. Two still fall (a loaded turn's drop and a walk-carry's
+# turn); they are kept here, expected to fail, so that the day they pass is seen.
+KNOWN_FALLS = {"transfer-45-5kg", "walk-carry-6kg"}
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param(
+            p.stem,
+            marks=pytest.mark.xfail(reason="falls (README, Envelope)", strict=False)
+            if p.stem in KNOWN_FALLS
+            else (),
+        )
+        for p in sorted(DATA.glob("*.yaml"))
+    ],
+)
+def test_issue_example_succeeds(tmp_path: Path, name: str) -> None:
+    loaded = load_scenario_file(DATA / f"{name}.yaml")
+    result = run_scenario(loaded.scenario, loaded.text, RunOptions(out_dir=tmp_path))
+    m = result.metrics
+    assert not m["fell"]
+    assert m["peak_torque_ratio"] <= 1.0
+    assert m["passed"], m["expectations"]
