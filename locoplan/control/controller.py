@@ -62,6 +62,11 @@ LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itsel
 # Time constant (s) of the low-pass filter on the measured hand load: above the 500 Hz tick's
 # contact noise, well below the 0.6-1.0 s load ramps it corrects.
 LOAD_FILTER_TAU = 0.03
+# Below this fraction of its mass in the hands, a held object counts as resting on something:
+# the hands stop lowering it (`step`). Pushing a box 1-3 cm further down onto its support (the
+# trunk lags and leans, so the planned place height is a few cm off) had the robot lean on its
+# hands, and it fell forward when they let go (envelope seed 1, transfer-021).
+SUPPORTED_LOAD = 0.5
 FEET = ("L", "R")
 OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
@@ -181,6 +186,7 @@ class LocoManipulationController:
         self._shift_offset = 0.0
         self._load_t = -math.inf
         self._mass_wbc: float | None = None
+        self._supported = False
         self._mass_mpc = 0.0
         self._hold_mass = sum(h.mass for h in plan.holds)
         # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
@@ -417,6 +423,7 @@ class LocoManipulationController:
         window, top = self._hold_window(now, 0.0)
         measured = min(self._load_filtered, float(top[0])) if window[0] else planned
         self._mass_wbc = measured
+        self._supported = bool(window[0]) and measured < SUPPORTED_LOAD * float(top[0])
         # The load the CoM shift is computed for may fall no faster than the plan's own ramp:
         # a release drops the measured load at once, and a CoM reference that jumped forward
         # by the lean it had against the load tipped the robot onto its toes 0.2-0.4 s later
@@ -602,6 +609,14 @@ class LocoManipulationController:
         J_hands = np.ascontiguousarray(J_fr[2:4, :3])
         p_hands = p_fr[2:4]
         v_hands = v_fr[2:4, :3]
+        if self._supported:
+            # Guarded lowering: once what the hands hold rests on something (the measured load
+            # is under SUPPORTED_LOAD of its mass), they stop pushing it further down.
+            hand_targets, v_hand_des = hand_targets.copy(), v_hand_des.copy()
+            for k in plan.holding_hands(t):
+                if hand_targets[k, 2] < p_hands[k, 2]:
+                    hand_targets[k, 2] = p_hands[k, 2]
+                    v_hand_des[k, 2] = max(0.0, float(v_hand_des[k, 2]))
         hand_acc = self._hand_kp * (hand_targets - p_hands) + self._hand_kd * (v_hand_des - v_hands)
         tau_ext = self._object_generalized_force(t, mass_wbc, J_hands, hand_acc)
 
