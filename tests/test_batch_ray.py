@@ -137,8 +137,9 @@ def test_crashed_and_hung_ray_tasks_are_that_scripts_error(tmp_path: Path) -> No
     _script(tmp_path / "iso" / "hang.yaml", "hanger")
     _script(tmp_path / "iso" / "ok.yaml", "fine")
     env = {"LOCOPLAN_TEST_CRASH": "crasher", "LOCOPLAN_TEST_HANG": "hanger"}
-    # --timeout 15: Ray's worker start-up is counted; the hung task is cancelled at 15 s.
-    args = ["iso", "--out", "out", "--junit", "r.xml", "--timeout", "15", "--jobs", "3"]
+    # --timeout 40: Ray's worker start-up is counted, and on a busy 2-core machine the
+    # crashing task took more than 15 s to start and crash; the hung task is cancelled at 40 s.
+    args = ["iso", "--out", "out", "--junit", "r.xml", "--timeout", "40", "--jobs", "3"]
     res = _batch([*args, "--backend", "ray"], tmp_path, env)
     assert res.returncode == 1, res.stderr
     assert "Traceback" not in res.stdout + res.stderr
@@ -146,7 +147,7 @@ def test_crashed_and_hung_ray_tasks_are_that_scripts_error(tmp_path: Path) -> No
     crash = cases["iso/crash.yaml"]["verdicts"]
     hang = cases["iso/hang.yaml"]["verdicts"]
     assert crash[0][0] == "error" and "Ray task failed: WorkerCrashedError" in crash[0][1]
-    assert hang == [("error", "timed out after 15 s (--timeout); Ray task cancelled")]
+    assert hang == [("error", "timed out after 40 s (--timeout); Ray task cancelled")]
     assert cases["iso/ok.yaml"]["verdicts"] == []
 
 

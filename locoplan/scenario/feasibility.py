@@ -132,17 +132,14 @@ def _fixture_rect(fx: FixtureSpec) -> list[tuple[float, float]]:
     )
 
 
-def _distance_to_rect(px: float, py: float, rect: list[tuple[float, float]]) -> float:
-    """Distance (m) from a point to a rectangle given by its corners (0 inside)."""
-    (x0, y0), (x1, y1), _, (x3, y3) = rect
-    # Axes of the rectangle: corner 0 -> 1 and corner 0 -> 3.
-    ux, uy = x1 - x0, y1 - y0
-    vx, vy = x3 - x0, y3 - y0
-    lu, lv = math.hypot(ux, uy), math.hypot(vx, vy)
-    ux, uy, vx, vy = ux / lu, uy / lu, vx / lv, vy / lv
-    cx, cy = (x1 + x3) / 2, (y1 + y3) / 2
-    du = abs((px - cx) * ux + (py - cy) * uy) - lu / 2
-    dv = abs((px - cx) * vx + (py - cy) * vy) - lv / 2
+def _distance_to_rect(
+    px: float, py: float, cx: float, cy: float, hx: float, hy: float, yaw: float
+) -> float:
+    """Distance (m) from a point to a rectangle (centre, half extents, yaw; 0 inside)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy = px - cx, py - cy
+    du = abs(c * dx + s * dy) - hx
+    dv = abs(-s * dx + c * dy) - hy
     return math.hypot(max(du, 0.0), max(dv, 0.0))
 
 
@@ -152,7 +149,13 @@ def _overlap_issues(scenario: Scenario) -> list[LocatedIssue]:
     r = ROBOT_FOOTPRINT_RADIUS
     for name, obj in scenario.objects.items():
         rect = _object_rect(obj)
-        d = _distance_to_rect(sx, sy, rect)
+        if obj.shape == "sphere":
+            hx = hy = obj.size[0]
+        else:
+            hx, hy = obj.size[0] / 2, obj.size[1] / 2
+        d = _distance_to_rect(
+            sx, sy, obj.position[0], obj.position[1], hx, hy, math.radians(obj.yaw)
+        )
         if d < r:
             issues.append(
                 LocatedIssue(
