@@ -98,10 +98,6 @@ CARRY_FORWARD: Final = 0.30
 # free that long (at least CARRY_SETTLE_MIN, s): 5 cm in 0.8 s peaks at 0.45 m/s^2, which tilts
 # a hanging box by under 3 deg.
 CARRY_FORWARD_RANGE: Final = 0.06
-# How far the trunk's front is ahead of its origin (m): robots/hector/hector.xml, trunk_box
-# half depth. A held object settles in to CARRY_GAP (m) between its near face and that front.
-TRUNK_FRONT: Final = 0.07
-CARRY_GAP: Final = 0.05
 CARRY_SETTLE_TIME: Final = 0.8
 CARRY_SETTLE_MIN: Final = 0.3
 CARRY_HEIGHT: Final = 0.02

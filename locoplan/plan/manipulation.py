@@ -289,12 +289,6 @@ class _Builder:
         # Then, while the hands have nothing else to do, the object comes in to CARRY_FORWARD
         # slowly enough not to set it swinging (closer is lighter to balance and to turn with).
         t_settle = min(task.end + k.CARRY_SETTLE_TIME, self.next_use(task))
-        # As close as its near face CARRY_GAP ahead of the trunk's front allows, and no further
-        # than CARRY_FORWARD: the load's moment about the hips and the lean it needs shrink
-        # with the distance (carried 0.30 m ahead, 5-6 kg boxes tipped the robot in 50-60
-        # deg/s turns; envelope seed 1).
-        depth = support_half_width(obj, oyaw, ax, ay)
-        close = min(k.CARRY_FORWARD, k.TRUNK_FRONT + depth + k.CARRY_GAP)
         for h in hands:
             side = SIDE[h]
             pre = beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
@@ -332,8 +326,8 @@ class _Builder:
             self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
             self.add(h, HandSegment(t_raise, task.end, w_raised, w_carry, i, "carry"))
             t_end = task.end
-            settled = (close, carry[1], carry[2])
-            if t_settle - task.end >= k.CARRY_SETTLE_MIN and abs(forward - close) > 1e-3:
+            settled = (k.CARRY_FORWARD, carry[1], carry[2])
+            if t_settle - task.end >= k.CARRY_SETTLE_MIN and abs(forward - k.CARRY_FORWARD) > 1e-3:
                 w_settled = HandWaypoint(settled, "trunk")
                 self.add(h, HandSegment(task.end, t_settle, w_carry, w_settled, i, "settle"))
                 t_end = t_settle
