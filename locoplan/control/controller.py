@@ -189,6 +189,12 @@ class LocoManipulationController:
         self._supported = False
         self._mass_mpc = 0.0
         self._hold_mass = sum(h.mass for h in plan.holds)
+        starts = {task.index: task.start for task in plan.tasks}
+        self._drop_windows = [
+            (starts[h.release_task], h.release)
+            for h in plan.holds
+            if h.release_kind == "drop" and h.release_task in starts
+        ]
         # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
         self._cols_leg = [np.arange(6, 11), np.arange(11, 16)]
         self._cols_arm = [np.arange(16, 19), np.arange(19, 22)]
@@ -423,7 +429,7 @@ class LocoManipulationController:
         window, top = self._hold_window(now, 0.0)
         measured = min(self._load_filtered, float(top[0])) if window[0] else planned
         self._mass_wbc = measured
-        self._supported = bool(window[0]) and measured < SUPPORTED_LOAD * float(top[0])
+        self._supported = self._placing(t) and measured < SUPPORTED_LOAD * float(top[0])
         # The load the CoM shift is computed for may fall no faster than the plan's own ramp:
         # a release drops the measured load at once, and a CoM reference that jumped forward
         # by the lean it had against the load tipped the robot onto its toes 0.2-0.4 s later
@@ -434,6 +440,12 @@ class LocoManipulationController:
         self._load_offset = measured - planned
         self._shift_offset = self._mass_mpc - planned
         self._load_t = t
+
+    def _placing(self, t: float) -> bool:
+        """Whether a drop is putting a held object down at t (from the drop's start to its
+        release): the only time the hands' guarded lowering applies (during a pick the
+        measured load is low until the lift, and the guard would ratchet the hands up)."""
+        return any(t0 <= t < t1 for t0, t1 in self._drop_windows)
 
     def _hold_window(self, t: FloatArray, extra: float) -> tuple[BoolArray, FloatArray]:
         """Whether the plan has an object between the hands at each time in t (from its grasp
