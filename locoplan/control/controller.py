@@ -67,6 +67,9 @@ LOAD_FILTER_TAU = 0.03
 # trunk lags and leans, so the planned place height is a few cm off) had the robot lean on its
 # hands, and it fell forward when they let go (envelope seed 1, transfer-021).
 SUPPORTED_LOAD = 0.5
+# Time constant (s) of the slow average of the measured hand load (`_update_load`): several
+# periods of the hands' 10-25 Hz load oscillations, below the 1.0 s load ramp.
+LOAD_FILTER_TAU_SLOW = 0.2
 FEET = ("L", "R")
 OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
@@ -182,6 +185,7 @@ class LocoManipulationController:
         # Measured-load feedback (see `_update_load`): filtered measured mass (kg) and the
         # offset (kg) of the measurement from the plan's load now.
         self._load_filtered: float | None = None
+        self._load_slow = 0.0
         self._load_offset = 0.0
         self._shift_offset = 0.0
         self._load_t = -math.inf
@@ -419,15 +423,24 @@ class LocoManipulationController:
         raw = max(0.0, hand_load / GRAVITY)
         if self._load_filtered is None or not math.isfinite(self._load_t):
             self._load_filtered = raw
+            self._load_slow = raw
         else:
             dt = max(0.0, t - self._load_t)
             a = dt / (LOAD_FILTER_TAU + dt)
             self._load_filtered += a * (raw - self._load_filtered)
+            b = dt / (LOAD_FILTER_TAU_SLOW + dt)
+            self._load_slow += b * (raw - self._load_slow)
         self._load_t = t
         now = np.array([t])
         planned = float(self._planned_mass(now)[0])
         window, top = self._hold_window(now, 0.0)
-        measured = min(self._load_filtered, float(top[0])) if window[0] else planned
+        # The smaller of a fast and a slow average: the measured force is the object's weight
+        # plus its inertia, m (g + a). Taken as it comes, an upward jerk of the hands read as a
+        # heavier object, whose feed-forward pushed the hands up harder: the arms ran to their
+        # torque limits with both hands rising 12 cm above their targets (envelope seed 1,
+        # transfer-014). The slow average follows the weight, the fast one a release.
+        estimate = min(self._load_filtered, self._load_slow)
+        measured = min(estimate, float(top[0])) if window[0] else planned
         self._mass_wbc = measured
         self._supported = self._placing(t) and measured < SUPPORTED_LOAD * float(top[0])
         # The load the CoM shift is computed for may fall no faster than the plan's own ramp:
