@@ -100,6 +100,18 @@ def _max_sim_time_option() -> Any:
 
 
 MAX_SIM_TIME = _max_sim_time_option()
+# The live view's port and pace, shared by `run` and `compare`.
+LIVE_PORT = typer.Option(
+    8765, "--port", metavar="PORT", min=0, max=65535, help="With --live: the port."
+)
+LIVE_PACE = typer.Option(
+    None,
+    "--pace",
+    metavar="K",
+    min=0.0,
+    help="With --live: run at K times real time (default 1; 0: as fast as it goes).",
+    show_default=False,
+)
 
 
 def _interrupted(exc: BaseException, message: str) -> NoReturn:

@@ -9,6 +9,8 @@ from locoplan.cli.common import (
     EXIT_EXPECTATION,
     EXIT_OK,
     EXIT_RUN_BROKE,
+    LIVE_PACE,
+    LIVE_PORT,
     MAX_SIM_TIME,
     _fail,
     _interrupted,
@@ -67,17 +69,8 @@ def compare_command(
         help="Serve each run to Foxglove while it goes, one after the other (Foxglove "
         "WebSocket on ws://localhost:PORT; the client reconnects for the second run).",
     ),
-    port: int = typer.Option(
-        8765, "--port", metavar="PORT", min=0, max=65535, help="With --live: the port."
-    ),
-    pace: float | None = typer.Option(
-        None,
-        "--pace",
-        metavar="K",
-        min=0.0,
-        help="With --live: run at K times real time (default 1; 0: as fast as it goes).",
-        show_default=False,
-    ),
+    port: int = LIVE_PORT,
+    pace: float | None = LIVE_PACE,
     max_sim_time: float = MAX_SIM_TIME,
 ) -> None:
     """Run a task script twice and compare: quasi-static vs dynamic, or Model 1 vs 2.

@@ -9,6 +9,8 @@ from locoplan.cli.common import (
     EXIT_EXPECTATION,
     EXIT_OK,
     EXIT_RUN_BROKE,
+    LIVE_PACE,
+    LIVE_PORT,
     MAX_SIM_TIME,
     PREPARING,
     _check_video_option,
@@ -69,17 +71,8 @@ def run_command(
         help="Serve the run to Foxglove while it goes (Foxglove WebSocket on "
         "ws://localhost:PORT, the log's topics), paced by --pace; the MCAP is still written.",
     ),
-    port: int = typer.Option(
-        8765, "--port", metavar="PORT", min=0, max=65535, help="With --live: the port."
-    ),
-    pace: float | None = typer.Option(
-        None,
-        "--pace",
-        metavar="K",
-        min=0.0,
-        help="With --live: run at K times real time (default 1; 0: as fast as it goes).",
-        show_default=False,
-    ),
+    port: int = LIVE_PORT,
+    pace: float | None = LIVE_PACE,
     max_sim_time: float = MAX_SIM_TIME,
 ) -> None:
     """Run one task script closed loop in MuJoCo (multi-contact MPC + WBC).
