@@ -85,6 +85,9 @@ THROW_FOLLOW_END: Final = 0.72
 # whole line then runs from about 0.15 m behind the carry pose (the object clear of the
 # trunk's front) to 0.16 m ahead of it (the hands 0.44 m from the shoulders).
 THROW_STOP_OFFSET: Final = 0.16
+# Smallest gap (m) kept between a thrown object pushed along the throw line and any fixture or
+# object (the line is raised as much as that needs; the hands track within about 2 cm).
+THROW_CLEARANCE: Final = 0.04
 # Speed of the planned push relative to the commanded release speed.
 THROW_SPEED_GAIN: Final = 1.0
 

@@ -47,6 +47,7 @@ from locoplan.plan.hand_paths import (
     approach_segments,
     beside,
     carry_forward,
+    clear_throw_line,
     default_waypoint,
     grip_height,
     initial_waypoint,
@@ -482,6 +483,8 @@ class _Builder:
         t_release = task.at_fraction(k.THROW_RELEASE)
         t_follow = task.at_fraction(k.THROW_FOLLOW_END)
         line = throw_line(self.trunk, (vx, vy, vz), t_wind, t_cruise, t_release, t_follow)
+        radius = obj.size[0] if obj.shape == "sphere" else max(half_extents(obj))
+        line = clear_throw_line(line, radius, self.obstacles(), t_wind)
         lat, vel = line.lateral, line.velocity
         half = hold.half_width
         up = (0.0, 0.0, 1.0)
