@@ -84,3 +84,40 @@ def test_throw_line_lengths_and_velocity() -> None:
     carry = np.array([k.CARRY_FORWARD, 0.0, plan.trunk.height + k.CARRY_HEIGHT])
     assert p["stop"] == pytest.approx(carry + k.THROW_STOP_OFFSET * u, abs=EXACT)
     assert line.lateral == pytest.approx((0.0, 1.0, 0.0), abs=EXACT)
+
+
+def test_throw_line_is_raised_to_clear_a_high_table() -> None:
+    # A shallow line whose far end passes 1 cm over a 0.53 m table with a 5 cm ball: raised
+    # by exactly what keeps the ball THROW_CLEARANCE from the table (sampled every 1 cm, so
+    # within 1 cm times the line's slope), direction and velocity unchanged; a line already
+    # clear comes back as it was.
+    from locoplan.plan.clearance import Obstacle
+    from locoplan.plan.hand_paths import ThrowLine, clear_throw_line
+
+    table = Obstacle("fixture:table", (0.45, 0.0, 0.265), (0.2, 0.3, 0.265))
+    line = ThrowLine(
+        (0.0, 0.0, 0.55),
+        (0.1, 0.0, 0.56),
+        (0.2, 0.0, 0.57),
+        (0.3, 0.0, 0.58),
+        (1.0, 0.0, 0.1),
+        (0.0, 1.0, 0.0),
+    )
+    raised = clear_throw_line(line, 0.05, (table,), 0.0)
+    lift = raised.wind[2] - line.wind[2]
+    assert lift > 0.0
+    for a, b in zip(
+        (line.wind, line.cruise, line.release, line.stop),
+        (raised.wind, raised.cruise, raised.release, raised.stop),
+        strict=True,
+    ):
+        assert b[:2] == a[:2] and b[2] == pytest.approx(a[2] + lift)
+    assert raised.velocity == line.velocity
+    gaps = [
+        table.distance(tuple(np.add(raised.wind, f * np.subtract(raised.stop, raised.wind))), 0.0)
+        - 0.05
+        for f in np.linspace(0.0, 1.0, 301)
+    ]
+    assert min(gaps) == pytest.approx(k.THROW_CLEARANCE, abs=0.002)
+    again = clear_throw_line(raised, 0.05, (table,), 0.0)
+    assert again.wind[2] == pytest.approx(raised.wind[2], abs=1e-5)
