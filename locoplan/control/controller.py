@@ -431,18 +431,17 @@ class LocoManipulationController:
             b = dt / (LOAD_FILTER_TAU_SLOW + dt)
             self._load_slow += b * (raw - self._load_slow)
         self._load_t = t
-        now = np.array([t])
-        planned = float(self._planned_mass(now)[0])
-        window, top = self._hold_window(now, 0.0)
+        planned = self._planned_mass_at(t)
+        top_now = self._hold_mass_at(t)
         # The smaller of a fast and a slow average: the measured force is the object's weight
         # plus its inertia, m (g + a). Taken as it comes, an upward jerk of the hands read as a
         # heavier object, whose feed-forward pushed the hands up harder: the arms ran to their
         # torque limits with both hands rising 12 cm above their targets (envelope seed 1,
         # transfer-014). The slow average follows the weight, the fast one a release.
         estimate = min(self._load_filtered, self._load_slow)
-        measured = min(estimate, float(top[0])) if window[0] else planned
+        measured = min(estimate, top_now) if top_now > 0.0 else planned
         self._mass_wbc = measured
-        self._supported = self._placing(t) and measured < SUPPORTED_LOAD * float(top[0])
+        self._supported = self._placing(t) and measured < SUPPORTED_LOAD * top_now
         # The load the CoM shift is computed for may fall no faster than the plan's own ramp:
         # a release drops the measured load at once, and a CoM reference that jumped forward
         # by the lean it had against the load tipped the robot onto its toes 0.2-0.4 s later
@@ -491,6 +490,26 @@ class LocoManipulationController:
         window, top = self._hold_window(t, extra)
         corrected = np.clip(planned + offset, 0.0, top)
         return np.where(window, corrected, planned)
+
+    def _planned_mass_at(self, t: float) -> float:
+        """Scalar `_planned_mass` (the per-tick path: no arrays)."""
+        out = 0.0
+        for h in self.plan.holds:
+            up = min(max((t - h.lift) / LOAD_RAMP, 0.0), 1.0)
+            frac = up * up * (3.0 - 2.0 * up)
+            if math.isfinite(h.release):
+                if h.release_kind == "throw":
+                    frac = frac if t < h.release else 0.0
+                else:
+                    down = min(max((h.release - t) / LOAD_RAMP_DOWN, 0.0), 1.0)
+                    frac *= down * down * (3.0 - 2.0 * down)
+            out += h.mass * frac
+        return out
+
+    def _hold_mass_at(self, t: float) -> float:
+        """Mass (kg) of what the plan has between the hands at t (grasp to release), 0 if
+        nothing."""
+        return sum(h.mass for h in self.plan.holds if h.grasp <= t < h.release)
 
     def _planned_mass(self, times: FloatArray) -> FloatArray:
         """Mass (kg) the plan has the hands carry at `times` (n,): each held object's mass times a
@@ -565,7 +584,11 @@ class LocoManipulationController:
         stance = (bool(plan.foot_stance(0, t)), bool(plan.foot_stance(1, t)))
         ref = plan.trunk_reference_at(t)
         self._update_load(t, hand_load)
-        mass_now = float(self.carried_mass(np.array([t]))[0])
+        if hand_load is None:
+            mass_now = float(self.carried_mass(np.array([t]))[0])
+        else:
+            # carried_mass at t itself: the measured load inside a hold, the plan's outside.
+            mass_now = self._mass_wbc if self._mass_wbc is not None else 0.0
         # The WBC's object feed-forward: the measured load now (the hands let go at once).
         mass_wbc = mass_now if self._mass_wbc is None else self._mass_wbc
         # Swing bookkeeping: remember where each swing started.

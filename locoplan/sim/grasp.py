@@ -99,6 +99,7 @@ class GraspManager:
             for g in range(m.ngeom)
             if int(m.geom_bodyid[g]) in scene.hand_body_ids and int(m.geom_contype[g]) != 0
         }
+        self._hand_geom_array = np.array(sorted(self._hand_geoms), dtype=np.int32)
         self._trunk_body = mujoco.mj_name2id(
             scene.model, mujoco.mjtObj.mjOBJ_BODY, scene.robot.trunk_body
         )
@@ -166,12 +167,17 @@ class GraspManager:
                     total -= float(data.efc_force[rows[2]])
             # The hand spheres also press on the object and carry part of it by friction.
             obj_geom = self.scene.object_geom_ids[hs.hold.object]
+            if data.ncon == 0:
+                continue
+            pairs = data.contact.geom[: data.ncon]
+            touching = np.flatnonzero(
+                ((pairs[:, 0] == obj_geom) & np.isin(pairs[:, 1], self._hand_geom_array))
+                | ((pairs[:, 1] == obj_geom) & np.isin(pairs[:, 0], self._hand_geom_array))
+            )
             wrench = np.zeros(6)
-            for i in range(data.ncon):
+            for i in touching.tolist():
                 c = data.contact[i]
-                g1, g2 = int(c.geom1), int(c.geom2)
-                if obj_geom not in (g1, g2) or not ({g1, g2} & self._hand_geoms):
-                    continue
+                g2 = int(c.geom2)
                 mujoco.mj_contactForce(self.scene.model, data, i, wrench)
                 f_world = c.frame.reshape(3, 3).T @ wrench[:3]  # on geom2, from geom1
                 total += float(f_world[2]) if g2 == obj_geom else -float(f_world[2])
