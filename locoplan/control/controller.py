@@ -70,6 +70,11 @@ SUPPORTED_LOAD = 0.5
 # Time constant (s) of the slow average of the measured hand load (`_update_load`): several
 # periods of the hands' 10-25 Hz load oscillations, below the 1.0 s load ramp.
 LOAD_FILTER_TAU_SLOW = 0.2
+# Shortest time (s) over which the held-load CoM shift may go from the full load to none
+# (`_update_load`). Checked from 0.2 to 0.6 s on pick-walk-drop, issue 12's example scripts and
+# 80 envelope scripts (seed 1): with 0.6 s the unloaded robot stood for too long with its CoM
+# leaning back against a load it no longer held (pick-walk-drop fell 1.2 s after its release).
+LOAD_RELEASE_DECAY = 0.2
 FEET = ("L", "R")
 OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
@@ -421,16 +426,15 @@ class LocoManipulationController:
         if hand_load is None:
             return
         raw = max(0.0, hand_load / GRAVITY)
+        dt = max(0.0, t - self._load_t) if math.isfinite(self._load_t) else 0.0
         if self._load_filtered is None or not math.isfinite(self._load_t):
             self._load_filtered = raw
             self._load_slow = raw
         else:
-            dt = max(0.0, t - self._load_t)
             a = dt / (LOAD_FILTER_TAU + dt)
             self._load_filtered += a * (raw - self._load_filtered)
             b = dt / (LOAD_FILTER_TAU_SLOW + dt)
             self._load_slow += b * (raw - self._load_slow)
-        self._load_t = t
         planned = self._planned_mass_at(t)
         top_now = self._hold_mass_at(t)
         # The smaller of a fast and a slow average: the measured force is the object's weight
@@ -442,12 +446,11 @@ class LocoManipulationController:
         measured = min(estimate, top_now) if top_now > 0.0 else planned
         self._mass_wbc = measured
         self._supported = self._placing(t) and measured < SUPPORTED_LOAD * top_now
-        # The load the CoM shift is computed for may fall no faster than the plan's own ramp:
-        # a release drops the measured load at once, and a CoM reference that jumped forward
-        # by the lean it had against the load tipped the robot onto its toes 0.2-0.4 s later
+        # The load the CoM shift is computed for falls no faster than LOAD_RELEASE_DECAY: a
+        # release drops the measured load at once, and a CoM reference that jumped forward by
+        # the lean it had against the load tipped the robot onto its toes 0.2-0.4 s later
         # (pick-walk-drop). The MPC's force model takes the measured load as it is.
-        dt = max(0.0, t - self._load_t) if math.isfinite(self._load_t) else 0.0
-        fall = self._hold_mass / LOAD_RAMP_DOWN * dt
+        fall = self._hold_mass / LOAD_RELEASE_DECAY * dt
         self._mass_mpc = max(measured, self._mass_mpc - fall)
         self._load_offset = measured - planned
         self._shift_offset = self._mass_mpc - planned
@@ -478,8 +481,8 @@ class LocoManipulationController:
 
     def shift_mass(self, times: FloatArray) -> FloatArray:
         """Mass (kg) the held-load CoM shift is computed for at `times` (n,): as
-        `carried_mass`, but falling no faster than LOAD_RAMP_DOWN allows, also after the
-        release."""
+        `carried_mass`, but falling no faster than LOAD_RELEASE_DECAY allows, also for
+        LOAD_RAMP_DOWN after the release."""
         return self._corrected(times, self._shift_offset, LOAD_RAMP_DOWN)
 
     def _corrected(self, times: FloatArray, offset: float, extra: float) -> FloatArray:
