@@ -67,9 +67,6 @@ LOAD_FILTER_TAU = 0.03
 # trunk lags and leans, so the planned place height is a few cm off) had the robot lean on its
 # hands, and it fell forward when they let go (envelope seed 1, transfer-021).
 SUPPORTED_LOAD = 0.5
-# Time constant (s) of the slow average of the measured hand load (`_update_load`): several
-# periods of the hands' 10-25 Hz load oscillations, below the 1.0 s load ramp.
-LOAD_FILTER_TAU_SLOW = 0.2
 # Shortest time (s) over which the held-load CoM shift may go from the full load to none
 # (`_update_load`). Checked from 0.2 to 0.6 s on pick-walk-drop, issue 12's example scripts and
 # 80 envelope scripts (seed 1): with 0.6 s the unloaded robot stood for too long with its CoM
@@ -190,7 +187,6 @@ class LocoManipulationController:
         # Measured-load feedback (see `_update_load`): filtered measured mass (kg) and the
         # offset (kg) of the measurement from the plan's load now.
         self._load_filtered: float | None = None
-        self._load_slow = 0.0
         self._load_offset = 0.0
         self._shift_offset = 0.0
         self._load_t = -math.inf
@@ -429,20 +425,12 @@ class LocoManipulationController:
         dt = max(0.0, t - self._load_t) if math.isfinite(self._load_t) else 0.0
         if self._load_filtered is None or not math.isfinite(self._load_t):
             self._load_filtered = raw
-            self._load_slow = raw
         else:
             a = dt / (LOAD_FILTER_TAU + dt)
             self._load_filtered += a * (raw - self._load_filtered)
-            b = dt / (LOAD_FILTER_TAU_SLOW + dt)
-            self._load_slow += b * (raw - self._load_slow)
         planned = self._planned_mass_at(t)
         top_now = self._hold_mass_at(t)
-        # The smaller of a fast and a slow average: the measured force is the object's weight
-        # plus its inertia, m (g + a). Taken as it comes, an upward jerk of the hands read as a
-        # heavier object, whose feed-forward pushed the hands up harder: the arms ran to their
-        # torque limits with both hands rising 12 cm above their targets (envelope seed 1,
-        # transfer-014). The slow average follows the weight, the fast one a release.
-        estimate = min(self._load_filtered, self._load_slow)
+        estimate = self._load_filtered
         measured = min(estimate, top_now) if top_now > 0.0 else planned
         self._mass_wbc = measured
         self._supported = self._placing(t) and measured < SUPPORTED_LOAD * top_now
