@@ -190,9 +190,9 @@ class LocoManipulationController:
         self._load_offset = 0.0
         self._shift_offset = 0.0
         self._load_t = -math.inf
-        self._mass_wbc: float | None = None
+        self._mass_now = 0.0
         self._supported = False
-        self._mass_mpc = 0.0
+        self._mass_shift = 0.0
         self._hold_mass = sum(h.mass for h in plan.holds)
         starts = {task.index: task.start for task in plan.tasks}
         self._drop_windows = [
@@ -432,16 +432,16 @@ class LocoManipulationController:
         top_now = self._hold_mass_at(t)
         estimate = self._load_filtered
         measured = min(estimate, top_now) if top_now > 0.0 else planned
-        self._mass_wbc = measured
+        self._mass_now = measured
         self._supported = self._placing(t) and measured < SUPPORTED_LOAD * top_now
         # The load the CoM shift is computed for falls no faster than LOAD_RELEASE_DECAY: a
         # release drops the measured load at once, and a CoM reference that jumped forward by
         # the lean it had against the load tipped the robot onto its toes 0.2-0.4 s later
         # (pick-walk-drop). The MPC's force model takes the measured load as it is.
         fall = self._hold_mass / LOAD_RELEASE_DECAY * dt
-        self._mass_mpc = max(measured, self._mass_mpc - fall)
+        self._mass_shift = max(measured, self._mass_shift - fall)
         self._load_offset = measured - planned
-        self._shift_offset = self._mass_mpc - planned
+        self._shift_offset = self._mass_shift - planned
         self._load_t = t
 
     def _placing(self, t: float) -> bool:
@@ -575,13 +575,11 @@ class LocoManipulationController:
         stance = (bool(plan.foot_stance(0, t)), bool(plan.foot_stance(1, t)))
         ref = plan.trunk_reference_at(t)
         self._update_load(t, hand_load)
-        if hand_load is None:
-            mass_now = float(self.carried_mass(np.array([t]))[0])
-        else:
-            # carried_mass at t itself: the measured load inside a hold, the plan's outside.
-            mass_now = self._mass_wbc if self._mass_wbc is not None else 0.0
-        # The WBC's object feed-forward: the measured load now (the hands let go at once).
-        mass_wbc = mass_now if self._mass_wbc is None else self._mass_wbc
+        # The load now, for the MPC and the WBC's object feed-forward: with a measurement,
+        # `_update_load` has it (carried_mass at t itself, without the arrays).
+        mass_now = (
+            self._mass_now if hand_load is not None else float(self.carried_mass(np.array([t]))[0])
+        )
         # Swing bookkeeping: remember where each swing started.
         for k in range(2):
             if not stance[k] and self._last_contact[k]:
@@ -657,7 +655,7 @@ class LocoManipulationController:
                     hand_targets[k, 2] = p_hands[k, 2]
                     v_hand_des[k, 2] = max(0.0, float(v_hand_des[k, 2]))
         hand_acc = self._hand_kp * (hand_targets - p_hands) + self._hand_kd * (v_hand_des - v_hands)
-        tau_ext = self._object_generalized_force(t, mass_wbc, J_hands, hand_acc)
+        tau_ext = self._object_generalized_force(t, mass_now, J_hands, hand_acc)
 
         t_w = time.perf_counter()
         wbc_out: WbcOutput | None = None

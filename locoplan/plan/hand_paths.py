@@ -61,9 +61,9 @@ def initial_waypoint(
     """Where the hand starts (and rests until its first task): the default pose, unless that
     pose comes within APPROACH_CLEARANCE of an object or fixture on [0, until] (s) along the
     planned trunk path (a box on a table 0.20-0.28 m ahead overlaps hands held 0.28 m ahead;
-    turning towards a table sweeps them into it); then the tucked pose, which stays within
-    0.185 m of the trunk axis. The simulator starts the arms in this pose, so a scene laid out
-    close to the robot is not touched before the plan means to."""
+    turning towards a table sweeps them into it); then the tucked pose, low and within
+    0.16 m of the trunk axis (HAND_TUCK_IN_TRUNK). The simulator starts the arms in this
+    pose, so a scene laid out close to the robot is not touched before the plan means to."""
     default = default_waypoint(hand)
     idle = make_track(HAND_NAMES[hand], default, [])
     c = track_clearance(idle, trunk, obstacles, 0.0, max(until, 0.0), k.APPROACH_CLEARANCE)

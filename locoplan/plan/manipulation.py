@@ -179,16 +179,11 @@ class _Builder:
             p = obj.position
             self.state[name] = (p[0], p[1], p[2], math.radians(obj.yaw))
         # Each hand rests where it starts until its first manipulation task (or the end).
-        firsts = [math.inf, math.inf]
-        for t in self.tasks:
-            if t.action in ("pick", "drop", "throw"):
-                for h in _HANDS_OF[t.hands or "both"]:
-                    firsts[h] = min(firsts[h], t.start)
         last = max((t.end for t in self.tasks), default=0.0)
         obstacles = self.obstacles()
         self.initial = (
-            initial_waypoint(0, self.trunk, obstacles, min(firsts[0], last)),
-            initial_waypoint(1, self.trunk, obstacles, min(firsts[1], last)),
+            initial_waypoint(0, self.trunk, obstacles, min(self.next_hand_use(0, 0.0), last)),
+            initial_waypoint(1, self.trunk, obstacles, min(self.next_hand_use(1, 0.0), last)),
         )
 
     def current(self, h: int) -> HandWaypoint:
