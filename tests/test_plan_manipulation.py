@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 from plan_fixtures import repo_scenario, scenario_from_text
 
-from locoplan.plan import PlanError, compile_plan
+from locoplan.plan import Plan, PlanError, compile_plan
 from locoplan.plan import constants as k
 from locoplan.plan.geometry import ballistic_landing, support_half_width
+from locoplan.plan.hand_paths import grip_height
 from locoplan.scenario.model import ObjectSpec
 
 TIME_TOL = 1e-9  # float rounding of start + fraction * duration
@@ -222,3 +223,56 @@ def test_pick_phases_and_grip_depend_on_carrying_while_moving(name: str, moving:
     # boxes held standing are gripped at the centre
     expected = k.GRASP_ABOVE_CENTRE if moving and obj.shape == "box" else 0.0
     assert hold.grip_height == expected
+
+
+# Envelope seed 5's transfer-012: the target platform (top 0.526 m) is higher than the table
+# the box comes from (0.455 m), and the robot turns towards it holding the box.
+SWEPT_TRANSFER = """
+version: 1
+name: swept-transfer
+gait: {period: 0.36, swing: 0.16}
+objects:
+  parcel:
+    {shape: box, size: [0.246, 0.152, 0.178], mass: 4.36, position: [-0.304, -0.221, 0.544],
+     yaw: -144.0}
+fixtures:
+  table: {kind: table, position: [-0.471, -0.342, 0.0], size: [0.591, 0.551, 0.455], yaw: -144.0}
+  platform:
+    {kind: platform, position: [0.399, -0.188, 0.0], size: [0.527, 0.456, 0.526], yaw: -25.2}
+tasks:
+  - {action: turn, angle: -144.0, start: 0.0, duration: 2.24}
+  - {action: pick, object: parcel, start: 2.12, duration: 1.12}
+  - {action: turn, angle: 118.8, start: 3.24, duration: 2.99}
+  - {action: drop, object: parcel, onto: platform, start: 5.75, duration: 0.84}
+end: 7.59
+"""
+
+
+def bottom_of_parcel(plan: Plan, times: np.ndarray) -> np.ndarray:
+    """The held parcel's bottom (m) at `times`: the plan's object path follows the hands,
+    which grip a box carried through a turn `grip_height` above its centre."""
+    obj = ObjectSpec(shape="box", size=[0.246, 0.152, 0.178], mass=4.36, position=[0, 0, 0])
+    return plan.object_positions(times)[:, 2] - grip_height(obj) - 0.178 / 2
+
+
+def test_a_carried_box_clears_the_fixtures_it_sweeps_over() -> None:
+    # Carried at the pick's height, the box's bottom (0.514 m) ran into the side of the
+    # platform while the robot turned towards it: from the pick's end until the drop starts,
+    # its planned bottom stays CARRY_CLEARANCE over the higher of the two tops.
+    plan = compile_plan(scenario_from_text(SWEPT_TRANSFER))
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    drop = next(t for t in plan.tasks if t.action == "drop")
+    times = np.linspace(pick.end, drop.start, 60)
+    assert bottom_of_parcel(plan, times).min() >= 0.526 + k.CARRY_CLEARANCE - 1e-9
+
+
+def test_the_carry_height_follows_the_swept_fixtures_not_a_constant() -> None:
+    # The same scene with the platform lower than the table: the box is carried lower, so
+    # it was the platform's top that raised it above (not a higher carry everywhere).
+    low = SWEPT_TRANSFER.replace("0.456, 0.526]", "0.456, 0.40]")
+    plan = compile_plan(scenario_from_text(low))
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    drop = next(t for t in plan.tasks if t.action == "drop")
+    bottom = bottom_of_parcel(plan, np.linspace(pick.end, drop.start, 30))
+    assert bottom.max() < 0.526 + k.CARRY_CLEARANCE - 0.01
+    assert bottom.min() >= 0.455 + k.CARRY_CLEARANCE - 1e-9

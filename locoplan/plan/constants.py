@@ -104,6 +104,13 @@ CARRY_FORWARD_RANGE: Final = 0.06
 CARRY_SETTLE_TIME: Final = 0.8
 CARRY_SETTLE_MIN: Final = 0.3
 CARRY_HEIGHT: Final = 0.02
+# A held object is carried with its bottom this far (m) above the top of every fixture it
+# can sweep over while held (see `ManipulationPlanner.swept_top`): 2 cm of clearance plus the
+# 2 cm by which the trunk sags under a carried 4-6 kg box (measured in the transfer family's
+# closed loops, envelope seed 5).
+CARRY_CLEARANCE: Final = 0.04
+# Trunk-path sampling step (s) when looking for the fixtures a held object sweeps over.
+SWEEP_SAMPLE: Final = 0.05
 # Pre-grasp clearance outside the object's sides (m): from the hand point, so the hand sphere
 # (HAND_RADIUS) keeps 3 cm, more than the hands' tracking error (about 2 cm).
 GRASP_CLEARANCE: Final = 0.05

@@ -61,7 +61,7 @@ from locoplan.plan.hands import HandSegment, HandTrack, HandWaypoint, Vec3, make
 from locoplan.plan.intervals import Intervals, merge_intervals
 from locoplan.plan.tasks import PlannedTask
 from locoplan.plan.trunk import TrunkPath
-from locoplan.scenario.model import Scenario
+from locoplan.scenario.model import ObjectSpec, Scenario
 
 _HANDS_OF = {"both": (0, 1), "left": (0,), "right": (1,)}
 
@@ -240,6 +240,40 @@ class _Builder:
         ]
         return min(starts, default=math.inf)
 
+    def swept_top(self, pick: PlannedTask, obj: ObjectSpec, forward: float) -> float:
+        """Highest top (m) of the fixtures that the object picked by `pick` can sweep over
+        while it is held (0 if none): those whose footprint comes within the object's reach
+        from the trunk axis (`forward` plus its footprint's half diagonal) anywhere on the
+        trunk's planned path from the pick's end until its release starts (or the last
+        locomotion task ends).
+
+        Why: a box carried at the pick's height swung into the side of a higher target while
+        the robot turned towards it (envelope seed 5, transfer-012: box bottom 0.514 m, the
+        platform's top 0.526 m); the blocked turn pushed the trunk 35 cm off its
+        turn-in-place point, and the robot fell at the drop. Every failing transfer of that
+        seed drifted more than 15 cm, the succeeding ones less than 10."""
+        hx, hy, _ = half_extents(obj)
+        reach = forward + math.hypot(hx, hy)
+        until = math.inf
+        for t in self.tasks:
+            if t.action in ("drop", "throw") and t.object == pick.object and t.start >= pick.end:
+                until = t.start
+                break
+        if not math.isfinite(until):
+            until = max([t.end for t in self.tasks if t.kind == "locomotion"] + [pick.end])
+        n = max(1, math.ceil((until - pick.start) / k.SWEEP_SAMPLE))
+        span = until - pick.start
+        poses = [self.trunk.pose_at(pick.start + span * i / n) for i in range(n + 1)]
+        top = 0.0
+        for name, fixture in self.scenario.fixtures.items():
+            box = fixture_obstacle(name, fixture)
+            height = box.center[2] + box.half[2]
+            if height <= top:
+                continue
+            if any(box.distance((x, y, box.center[2]), 0.0) < reach for x, y, *_ in poses):
+                top = height
+        return top
+
     def obstacles(self) -> tuple[Obstacle, ...]:
         """Fixtures and every object not held now, where the plan has put them so far."""
         out = [fixture_obstacle(n, f) for n, f in self.scenario.fixtures.items()]
@@ -282,6 +316,8 @@ class _Builder:
         lift = grip_height(obj) if moving else 0.0
         gz = oz + lift
         forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
+        half_z = half_extents(obj)[2]
+        swept_top = self.swept_top(task, obj, forward)
         # Then, while the hands have nothing else to do, the object comes in to CARRY_FORWARD
         # slowly enough not to set it swinging (closer is lighter to balance and to turn with).
         t_settle = min(task.end + k.CARRY_SETTLE_TIME, self.next_use(task))
@@ -294,7 +330,11 @@ class _Builder:
             # Carried no lower than it was raised: a box picked from a table higher than the
             # carry pose would otherwise be lowered back towards that table's top while the
             # robot turns or walks away from it (its corner caught the table's edge).
-            carry_z = max(k.CARRY_HEIGHT + lift, raised[2] - self.trunk.height)
+            carry_z = max(
+                k.CARRY_HEIGHT + lift,
+                raised[2] - self.trunk.height,
+                swept_top + k.CARRY_CLEARANCE + half_z + lift - self.trunk.height,
+            )
             carry = (forward, side * (half - k.GRASP_SQUEEZE), carry_z)
             w_pre = HandWaypoint(pre, "world")
             w_touch = HandWaypoint(touch, "world")
