@@ -148,6 +148,13 @@ class _OpenHold:
     grip_height: float
 
 
+def carry_reach(obj: ObjectSpec, forward: float) -> float:
+    """How far (m) from the trunk axis a held object reaches: its centre `forward` ahead
+    plus its footprint's half diagonal."""
+    hx, hy, _ = half_extents(obj)
+    return forward + math.hypot(hx, hy)
+
+
 @dataclass
 class _Builder:
     scenario: Scenario
@@ -240,20 +247,15 @@ class _Builder:
         ]
         return min(starts, default=math.inf)
 
-    def swept_top(self, pick: PlannedTask, obj: ObjectSpec, forward: float) -> float:
+    def carry_top(self, pick: PlannedTask, obj: ObjectSpec, forward: float) -> float:
         """Highest top (m) of the fixtures that the object picked by `pick` can sweep over
-        while it is held (0 if none): those whose footprint comes within the object's reach
-        from the trunk axis (`forward` plus its footprint's half diagonal) anywhere on the
-        trunk's planned path from the pick's end until its release starts (or the last
-        locomotion task ends).
+        while it is carried (0 if none): `swept_top` from the pick's start until its release
+        starts (or the last locomotion task ends).
 
         Why: a box carried at the pick's height swung into the side of a higher target while
         the robot turned towards it (envelope seed 5, transfer-012: box bottom 0.514 m, the
         platform's top 0.526 m); the blocked turn pushed the trunk 35 cm off its
-        turn-in-place point, and the robot fell at the drop. Every failing transfer of that
-        seed drifted more than 15 cm, the succeeding ones less than 10."""
-        hx, hy, _ = half_extents(obj)
-        reach = forward + math.hypot(hx, hy)
+        turn-in-place point, and the robot fell at the drop."""
         until = math.inf
         for t in self.tasks:
             if t.action in ("drop", "throw") and t.object == pick.object and t.start >= pick.end:
@@ -261,11 +263,18 @@ class _Builder:
                 break
         if not math.isfinite(until):
             until = max([t.end for t in self.tasks if t.kind == "locomotion"] + [pick.end])
-        n = max(1, math.ceil((until - pick.start) / k.SWEEP_SAMPLE))
-        span = until - pick.start
-        poses = [self.trunk.pose_at(pick.start + span * i / n) for i in range(n + 1)]
+        return self.swept_top(pick.start, until, carry_reach(obj, forward))
+
+    def swept_top(self, t0: float, t1: float, reach: float, skip: str | None = None) -> float:
+        """Highest top (m) of the fixtures (but `skip`) whose footprint comes within `reach`
+        (m) of the trunk's vertical axis anywhere on its planned path over [t0, t1]; 0 if
+        none. The path is sampled every SWEEP_SAMPLE s."""
+        n = max(1, math.ceil((t1 - t0) / k.SWEEP_SAMPLE))
+        poses = [self.trunk.pose_at(t0 + (t1 - t0) * i / n) for i in range(n + 1)]
         top = 0.0
         for name, fixture in self.scenario.fixtures.items():
+            if name == skip:
+                continue
             box = fixture_obstacle(name, fixture)
             height = box.center[2] + box.half[2]
             if height <= top:
@@ -317,7 +326,7 @@ class _Builder:
         gz = oz + lift
         forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
         half_z = half_extents(obj)[2]
-        swept_top = self.swept_top(task, obj, forward)
+        swept_top = self.carry_top(task, obj, forward)
         # Then, while the hands have nothing else to do, the object comes in to CARRY_FORWARD
         # slowly enough not to set it swinging (closer is lighter to balance and to turn with).
         t_settle = min(task.end + k.CARRY_SETTLE_TIME, self.next_use(task))
@@ -463,6 +472,20 @@ class _Builder:
         placed = object_obstacle(name, obj, target, obj_yaw, drift, t_release)
         depth = support_half_width(obj, obj_yaw, ax, ay)
         obstacles = (*self.obstacles(), placed)
+        # The hover phase brings the object over the target while the robot may still turn
+        # towards it: it stays clear of the other fixtures it passes (the table it came from)
+        # until it is over the target, and only the lowering goes below their tops.
+        # (Envelope seed 5, transfer-027: a drop starting mid-turn lowered the box onto the
+        # corner of its own table for 0.9 s, 77 deg from the conveyor it was going to.)
+        passed = self.swept_top(
+            task.start,
+            t_hover,
+            carry_reach(obj, k.CARRY_FORWARD + k.CARRY_FORWARD_RANGE),
+            task.onto,
+        )
+        hover_floor = 0.0
+        if passed > 0.0:
+            hover_floor = passed + k.CARRY_CLEARANCE + half_extents(obj)[2] + hold.grip_height
         i = task.index
         for h in hold.hands:
             side = SIDE[h]
@@ -472,7 +495,7 @@ class _Builder:
             width = half + k.GRASP_CLEARANCE + towards * (task.end - t_release)
             grip_at = (tx, ty, tz + hold.grip_height)
             put = beside(grip_at, side * (half - k.GRASP_SQUEEZE), lx, ly)
-            hover = (put[0], put[1], put[2] + k.DROP_HOVER_HEIGHT)
+            hover = (put[0], put[1], max(put[2] + k.DROP_HOVER_HEIGHT, hover_floor))
             opened = beside(grip_at, side * width, lx, ly)
             back = beside(opened, -(depth + k.GRASP_CLEARANCE), ax, ay)
             w_put = HandWaypoint(put, "world")
