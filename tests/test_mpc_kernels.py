@@ -314,3 +314,34 @@ def test_odd_input_types_reuse_the_compiled_kernels() -> None:
         kernel = getattr(mpc_kernels, name)
         if isinstance(kernel, CPUDispatcher) and not name.startswith("_"):
             assert len(kernel.signatures) <= 1, (name, kernel.signatures)
+
+
+def test_held_object_inertia_enters_the_external_wrench() -> None:
+    # Model 2 with a planned object acceleration a: the hands feel m_o (g - a) at the object,
+    # f_ext = m_o (-a_x, -a_y, -(g + a_z)) and tau_ext = (p_object - p_com) x f_ext; with
+    # a = 0 it is the weight alone. Exact arithmetic on a few products (rounding only).
+    inp = synthetic_input(object_mass=3.0)
+    s = MpcSettings()
+    mpc = MultiContactMpc(s)
+    Ib = np.ascontiguousarray(inp.inertia_body)
+    kern = mpc._get_kernel(np.ascontiguousarray(inp.yaw_lin), Ib)
+    rest = step_terms(inp, s.dt, kern.Iinv, Ib)
+    a = np.tile([1.5, -2.0, 0.7], (N, 1))
+    moving = step_terms(replace(inp, a_object=a), s.dt, kern.Iinv, Ib)
+    held = np.asarray(inp.object_held) & (np.asarray(inp.object_mass) > 0)
+    assert held.any() and not held.all()
+    m_o = 3.0
+    f = m_o * np.array([-1.5, 2.0, -(srbd.GRAVITY + 0.7)])
+    assert inp.p_object is not None
+    for k in range(N):
+        if not held[k]:
+            np.testing.assert_array_equal(moving.f_ext[k], 0.0)
+            continue
+        pc = inp.x0[srbd.POS] if k == 0 else inp.x_ref[k - 1, srbd.POS]
+        np.testing.assert_allclose(moving.f_ext[k], f, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            moving.tau_ext[k], np.cross(inp.p_object[k] - pc, f), rtol=0, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            rest.f_ext[k], [0.0, 0.0, -m_o * srbd.GRAVITY], rtol=0, atol=1e-12
+        )

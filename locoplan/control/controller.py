@@ -367,6 +367,7 @@ class LocoManipulationController:
             planned_now = self._planned_object_positions(np.array([t]))[0]
             p_obj = p_obj + (p_hands_mid - planned_now)
         x_ref[:, 3:5] += shift[1:]
+        a_obj = self._planned_object_accelerations(t, dt, N) if held.any() else None
         inp = MpcInput(
             x0=x0,
             x_ref=x_ref,
@@ -380,9 +381,25 @@ class LocoManipulationController:
             object_held=held,
             object_mass=obj_mass,
             p_object=p_obj,
+            a_object=a_obj,
             model=self.s.model,
         )
         return self.mpc.update(inp)
+
+    def _planned_object_accelerations(self, t: float, dt: float, n: int) -> FloatArray:
+        """Planned acceleration (n, 3) of the held object at t + dt k, k = 1..n (m/s^2), by
+        second differences of its planned path on the horizon's grid; zero where the stencil
+        leaves the plan's hold window (before the grasp the path is not the object's).
+
+        Why: a held object swung round the trunk in a loaded turn, or lifted, pushes the
+        hands with -m_o a_o as well as its weight (the WBC's feed-forward already had it);
+        the MPC's external force now has it too."""
+        grid = t + dt * np.arange(0, n + 2, dtype=np.float64)
+        p = self._planned_object_positions(grid)
+        a = (p[2:] - 2.0 * p[1:-1] + p[:-2]) / (dt * dt)
+        inside = self._hold_window(grid, 0.0)[0]
+        a[~(inside[:-2] & inside[1:-1] & inside[2:])] = 0.0
+        return a
 
     def _planned_object_positions(self, times: FloatArray) -> FloatArray:
         """`Plan.object_positions` (n, 3) along the planned trunk path, memoised per

@@ -175,7 +175,8 @@ class MpcInput:
     the dynamics of step k are linearised about (the reference yaw). ``mass`` (kg),
     ``inertia_body`` (3, 3) (kg m^2, trunk axes). ``object_held`` (N,) bool (sigma_e),
     ``object_mass`` (kg; a scalar or (N,) per step), ``p_object`` (N, 3) planned object CoM
-    (world, m). ``model``
+    (world, m), ``a_object`` (N, 3) its planned acceleration (world, m/s^2; None: at rest;
+    the external-force model adds its inertia, -m_o a_o, to the weight). ``model``
     "external-force" (Model 2) or "combined" (Model 1). ``t`` the time (s): reported in
     errors, and the elapsed whole steps since the previous update shift the previous
     solution (fallback) and its active set (the active-set solver's starting guess).
@@ -195,6 +196,7 @@ class MpcInput:
     object_held: BoolArray
     object_mass: float | FloatArray = 0.0
     p_object: FloatArray | None = None
+    a_object: FloatArray | None = None
     model: str = "external-force"
     t: float = 0.0
 
@@ -226,6 +228,10 @@ class MpcInput:
         elif self.p_object.shape != (N, 3):
             raise ValueError(
                 f"MpcInput.p_object has shape {self.p_object.shape}, expected ({N}, 3)"
+            )
+        if self.a_object is not None and self.a_object.shape != (N, 3):
+            raise ValueError(
+                f"MpcInput.a_object has shape {self.a_object.shape}, expected ({N}, 3)"
             )
 
     @property

@@ -171,6 +171,7 @@ def step_terms(
     object_held: BoolArray,
     object_mass: FloatArray,
     p_object: FloatArray,
+    a_object: FloatArray,
     combined: bool,
 ) -> tuple[
     FloatArray,
@@ -187,6 +188,7 @@ def step_terms(
 
     ``object_held`` (N,) and ``object_mass`` (N,) (kg): an object of that mass is held at
     step k (it counts where both are set), ``p_object`` (N, 3) its CoM (world, m),
+    ``a_object`` (N, 3) its planned acceleration (world, m/s^2; Model 2 only),
     ``Iinv_body`` (N, 3, 3) R_z I_body^-1 R_z' (`yaw_terms`).
     ``combined``: Model 1 (trunk and object one rigid body about their joint CoM), else Model
     2 (the object's weight as a known external wrench). Returns Iinv (N, 3, 3), mass (N,),
@@ -258,11 +260,21 @@ def step_terms(
                 mass_k[k] = m_t
                 lever[0], lever[1], lever[2] = h0, h1, h2
             else:
-                fz = -m_o * GRAVITY
+                # What the held object does to the hands: m_o (g - a_o), its weight and its
+                # inertia along the planned path (a loaded turn swings it round the trunk).
+                fx = -m_o * a_object[k, 0]
+                fy = -m_o * a_object[k, 1]
+                fz = -m_o * (GRAVITY + a_object[k, 2])
+                f_ext[k, 0] = fx
+                f_ext[k, 1] = fy
                 f_ext[k, 2] = fz
-                # tau = (p_object - p_com) x (0, 0, fz)
-                tau_ext[k, 0] = (p_object[k, 1] - pc1) * fz
-                tau_ext[k, 1] = -(p_object[k, 0] - pc0) * fz
+                # tau = (p_object - p_com) x f
+                rx = p_object[k, 0] - pc0
+                ry = p_object[k, 1] - pc1
+                rz = p_object[k, 2] - pc2
+                tau_ext[k, 0] = ry * fz - rz * fy
+                tau_ext[k, 1] = rz * fx - rx * fz
+                tau_ext[k, 2] = rx * fy - ry * fx
         kv = dt / mass_k[k]
         for f in range(2):
             c, s = math.cos(foot_yaw[k, f]), math.sin(foot_yaw[k, f])
@@ -726,6 +738,7 @@ def warm_up() -> None:
         Iinv,
         np.zeros(N, dtype=np.bool_),
         np.zeros(N),
+        np.zeros((N, 3)),
         np.zeros((N, 3)),
         False,
     )

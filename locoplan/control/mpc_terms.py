@@ -121,6 +121,8 @@ def step_terms(inp: MpcInput, dt: float, Iinv_model2: FloatArray, Ib: FloatArray
     else:
         m_o = np.full(N, float(np.asarray(m_o)))
     p_object = _zeros_n3(N) if inp.p_object is None else _f64(inp.p_object)
+    # Writable like every given a_object (a read-only array is another numba signature).
+    a_object = np.zeros((N, 3)) if inp.a_object is None else _f64(inp.a_object)
     Iinv, mass, tau_ext, f_ext, Tw, c, s, Phi, cols = mpc_kernels.step_terms(
         float(dt),
         _f64(inp.x0),
@@ -135,6 +137,7 @@ def step_terms(inp: MpcInput, dt: float, Iinv_model2: FloatArray, Ib: FloatArray
         np.ascontiguousarray(inp.object_held, dtype=np.bool_),
         m_o,
         p_object,
+        a_object,
         inp.model == "combined",
     )
     return StepTerms(

@@ -148,6 +148,13 @@ class _OpenHold:
     grip_height: float
 
 
+def carry_reach(obj: ObjectSpec, forward: float) -> float:
+    """How far (m) from the trunk axis a held object reaches: its centre `forward` ahead
+    plus its footprint's half diagonal."""
+    hx, hy, _ = half_extents(obj)
+    return forward + math.hypot(hx, hy)
+
+
 @dataclass
 class _Builder:
     scenario: Scenario
@@ -241,9 +248,9 @@ class _Builder:
         return min(starts, default=math.inf)
 
     def carry_top(self, pick: PlannedTask, obj: ObjectSpec, forward: float) -> float:
-        """Highest top (m) of the fixtures that the object picked by `pick` passes over while
-        it is carried (0 if none): `swept_top` from the pick's start until its release starts
-        (or the last locomotion task ends).
+        """Highest top (m) of the fixtures that the object picked by `pick` can sweep over
+        while it is carried (0 if none): `swept_top` from the pick's start until its release
+        starts (or the last locomotion task ends).
 
         Why: a box carried at the pick's height swung into the side of a higher target while
         the robot turned towards it (envelope seed 5, transfer-012: box bottom 0.514 m, the
@@ -256,22 +263,14 @@ class _Builder:
                 break
         if not math.isfinite(until):
             until = max([t.end for t in self.tasks if t.kind == "locomotion"] + [pick.end])
-        return self.swept_top(pick.start, until, obj, forward)
+        return self.swept_top(pick.start, until, carry_reach(obj, forward))
 
-    def swept_top(
-        self, t0: float, t1: float, obj: ObjectSpec, forward: float, skip: str | None = None
-    ) -> float:
-        """Highest top (m) of the fixtures (but `skip`) that `obj`, carried `forward` (m)
-        ahead of the trunk on its planned path over [t0, t1], comes over: its centre within
-        its footprint's half diagonal of theirs. 0 if none. The path is sampled every
-        SWEEP_SAMPLE s."""
-        hx, hy, _ = half_extents(obj)
-        reach = math.hypot(hx, hy)
+    def swept_top(self, t0: float, t1: float, reach: float, skip: str | None = None) -> float:
+        """Highest top (m) of the fixtures (but `skip`) whose footprint comes within `reach`
+        (m) of the trunk's vertical axis anywhere on its planned path over [t0, t1]; 0 if
+        none. The path is sampled every SWEEP_SAMPLE s."""
         n = max(1, math.ceil((t1 - t0) / k.SWEEP_SAMPLE))
-        centres = []
-        for i in range(n + 1):
-            x, y, yaw, *_ = self.trunk.pose_at(t0 + (t1 - t0) * i / n)
-            centres.append((x + forward * math.cos(yaw), y + forward * math.sin(yaw)))
+        poses = [self.trunk.pose_at(t0 + (t1 - t0) * i / n) for i in range(n + 1)]
         top = 0.0
         for name, fixture in self.scenario.fixtures.items():
             if name == skip:
@@ -280,7 +279,7 @@ class _Builder:
             height = box.center[2] + box.half[2]
             if height <= top:
                 continue
-            if any(box.distance((x, y, box.center[2]), 0.0) < reach for x, y in centres):
+            if any(box.distance((x, y, box.center[2]), 0.0) < reach for x, y, *_ in poses):
                 top = height
         return top
 
@@ -478,7 +477,12 @@ class _Builder:
         # until it is over the target, and only the lowering goes below their tops.
         # (Envelope seed 5, transfer-027: a drop starting mid-turn lowered the box onto the
         # corner of its own table for 0.9 s, 77 deg from the conveyor it was going to.)
-        passed = self.swept_top(task.start, t_hover, obj, k.CARRY_FORWARD, task.onto)
+        passed = self.swept_top(
+            task.start,
+            t_hover,
+            carry_reach(obj, k.CARRY_FORWARD + k.CARRY_FORWARD_RANGE),
+            task.onto,
+        )
         hover_floor = 0.0
         if passed > 0.0:
             hover_floor = passed + k.CARRY_CLEARANCE + half_extents(obj)[2] + hold.grip_height
