@@ -209,14 +209,19 @@ class _Builder:
                     task.index,
                 )
 
+    def release_of(self, pick: PlannedTask) -> PlannedTask | None:
+        """The first drop or throw of what `pick` picks up, starting after the pick starts
+        (manipulation tasks never overlap, so after it ends), or None."""
+        for t in self.tasks:
+            if t.action in ("drop", "throw") and t.object == pick.object and t.start >= pick.start:
+                return t
+        return None
+
     def carried_while_moving(self, pick: PlannedTask) -> bool:
         """Whether the robot walks, turns or steps while it holds what `pick` picks up (from
         the pick's start to the first drop or throw of that object, or the end)."""
-        until = math.inf
-        for t in self.tasks:
-            if t.action in ("drop", "throw") and t.object == pick.object and t.start >= pick.start:
-                until = t.end
-                break
+        release = self.release_of(pick)
+        until = math.inf if release is None else release.end
         return any(
             t.action in ("walk", "turn", "step") and t.start < until and t.end > pick.start
             for t in self.tasks
@@ -256,12 +261,10 @@ class _Builder:
         the robot turned towards it (envelope seed 5, transfer-012: box bottom 0.514 m, the
         platform's top 0.526 m); the blocked turn pushed the trunk 35 cm off its
         turn-in-place point, and the robot fell at the drop."""
-        until = math.inf
-        for t in self.tasks:
-            if t.action in ("drop", "throw") and t.object == pick.object and t.start >= pick.end:
-                until = t.start
-                break
-        if not math.isfinite(until):
+        release = self.release_of(pick)
+        if release is not None:
+            until = release.start
+        else:
             until = max([t.end for t in self.tasks if t.kind == "locomotion"] + [pick.end])
         return self.swept_top(pick.start, until, carry_reach(obj, forward))
 
