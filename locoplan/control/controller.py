@@ -563,8 +563,24 @@ class LocoManipulationController:
 
         From the lead times t_lead (n,) (the times concerned + LOAD_LEAD), the carried mass
         there (n,) kg and the CoM reference there (n, 3) m."""
-        d = self._planned_object_positions(t_lead)[:, :2] - p_com[:, :2]
+        d = self._planned_object_positions(self._held_times(t_lead))[:, :2] - p_com[:, :2]
         return -(mass / (self.mass + mass))[:, None] * d
+
+    def _held_times(self, t_lead: FloatArray) -> FloatArray:
+        """Lead times (n,) at which to take the held object's planned position for the CoM
+        shift: a lead time past a drop's release, while the shift still counts that object
+        (LOAD_LEAD + LOAD_RAMP_DOWN after it), is moved back to just before the release. Past
+        it the plan has no object between the hands (object_positions gives the trunk), and
+        the shift for what load remained vanished LOAD_LEAD before the release: the CoM
+        reference jumped forward with part of the load still in the hands (envelope seed 11,
+        transfer-008)."""
+        out = np.array(t_lead, dtype=float)
+        for h in self.plan.holds:
+            if h.release_kind != "drop" or not math.isfinite(h.release):
+                continue
+            late = (out >= h.release) & (out < h.release + LOAD_LEAD + LOAD_RAMP_DOWN)
+            out[late] = h.release - 1e-4
+        return out
 
     # -- the tick ------------------------------------------------------------------------------
     def step(

@@ -1,0 +1,56 @@
+"""The controller's held-load model around a drop's release (no simulation: the plan and the
+controller's load bookkeeping only)."""
+
+from __future__ import annotations
+
+import numpy as np
+from plan_fixtures import scenario_from_text
+
+from locoplan.control.controller import LOAD_LEAD, LocoManipulationController
+from locoplan.plan import compile_plan
+from locoplan.robot.description import load_robot_description
+from locoplan.robot.pinocchio_model import PinocchioRobot
+
+HOLD_AND_PUT_BACK = """
+version: 1
+name: hold-and-put-back
+objects:
+  block: {shape: box, size: [0.2, 0.2, 0.15], mass: 5.0, position: [0.33, 0.0, 0.535]}
+fixtures:
+  table: {kind: table, position: [0.48, 0.0, 0.0], size: [0.4, 0.6, 0.46]}
+tasks:
+  - {action: stand, start: 0.0, duration: 0.5}
+  - {action: pick, object: block, start: 0.5, duration: 1.5}
+  - {action: stand, start: 2.0, duration: 2.0}
+  - {action: drop, object: block, onto: table, start: 4.0, duration: 1.2}
+end: 6.0
+"""
+
+
+def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
+    """While the wrist sensors measure the whole weight in the hands, the CoM shift must point
+    away from the object for whatever load it counts, up to the planned release: the lead
+    time (t + LOAD_LEAD) of the last instants before it lies past the release, where the plan
+    has no object between the hands, and the shift there once fell to zero with the measured
+    load still on (the CoM reference jumped 7 cm forward; envelope seed 11, transfer-008 fell
+    onto its target). Its size is m_o d / (m + m_o) for the load counted (`shift_mass`) and
+    the object's planned offset d from the CoM reference, checked to 1 mm (the object path's
+    cache rounds times to 1 us)."""
+    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    (hold,) = plan.holds
+    weight = hold.mass * 9.81
+    for t in np.linspace(hold.release - 2.0 * LOAD_LEAD, hold.release - 1e-3, 13):
+        ctl._update_load(float(t), weight)
+        lead = np.array([t + LOAD_LEAD])
+        mass = ctl.shift_mass(lead)
+        p_com, *_ = ctl._com_reference(lead)
+        shift = ctl._com_shift(lead, mass, p_com)[0]
+        obj = plan.object_positions(np.array([min(lead[0], hold.release - 1e-3)]))[0]
+        d = obj[:2] - p_com[0, :2]
+        expected = -mass[0] / (ctl.mass + mass[0]) * d
+        # Forward is +x (robot_start yaw 0): backwards wherever load is counted.
+        assert mass[0] > 0.05 * hold.mass, t
+        assert shift[0] < -0.1 * mass[0] / (ctl.mass + mass[0]), (t, shift)
+        np.testing.assert_allclose(shift, expected, atol=1e-3)
