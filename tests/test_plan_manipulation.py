@@ -10,6 +10,7 @@ from plan_fixtures import repo_scenario, scenario_from_text
 
 from locoplan.plan import Plan, PlanError, compile_plan
 from locoplan.plan import constants as k
+from locoplan.plan.clearance import fixture_obstacle, track_clearance
 from locoplan.plan.geometry import ballistic_landing, support_half_width
 from locoplan.plan.hand_paths import grip_height
 from locoplan.scenario.model import ObjectSpec
@@ -276,3 +277,37 @@ def test_the_carry_height_follows_the_swept_fixtures_not_a_constant() -> None:
     bottom = bottom_of_parcel(plan, np.linspace(pick.end, drop.start, 30))
     assert bottom.max() < 0.526 + k.CARRY_CLEARANCE - 0.01
     assert bottom.min() >= 0.455 + k.CARRY_CLEARANCE - 1e-9
+
+
+SHORT_STANDING_PICK = """
+version: 1
+name: short-standing-pick
+objects:
+  block: {shape: box, size: [0.171, 0.203, 0.198], mass: 4.61, position: [0.312, 0.0, 0.626]}
+fixtures:
+  table: {kind: table, position: [0.44, 0.0, 0.0], size: [0.416, 0.55, 0.527]}
+tasks:
+  - {action: stand, start: 0.0, duration: 0.5}
+  - {action: pick, object: block, start: 0.5, duration: 1.05}
+  - {action: stand, start: 1.55, duration: 3.0}
+end: 5.0
+"""
+
+
+def test_a_reach_from_the_tucked_pose_rises_before_it_goes_out() -> None:
+    """The box is near enough that the hands start tucked (low, beside the trunk); a 1.05 s
+    pick leaves 0.42 s to reach. The straight line from the tucked pose to the pre-grasp
+    point passes the table's near edge 1 cm above its top (hand radius 2 cm): it must not be
+    the path. From a tucked start the hand needs no tuck move, so the rise and the level
+    reach fit before the grasp, and the whole approach keeps APPROACH_CLEARANCE from the
+    table (sampled every 10 ms with the planner's own yaw and position allowances)."""
+    scenario = scenario_from_text(SHORT_STANDING_PICK)
+    plan = compile_plan(scenario)
+    (pick,) = [t for t in plan.tasks if t.action == "pick"]
+    t_reach = pick.at_fraction(k.PICK_STANDING.reach_end)
+    table = tuple(fixture_obstacle(n, f) for n, f in scenario.fixtures.items())
+    for track in plan.manipulation.tracks:
+        labels = [s.label for s in track.segments if s.t1 <= t_reach + 1e-9]
+        assert "lift" in labels, labels
+        c = track_clearance(track, plan.trunk, table, 0.0, t_reach, k.APPROACH_CLEARANCE)
+        assert c.first_below is None, c

@@ -186,19 +186,30 @@ def approach_segments(
     if c_direct.first_below is None:
         return direct
     t_hit = c_direct.first_below
+    tuck = tuck_waypoint(hand, tuck_y)
+    # A hand that rests tucked already (the initial pose beside a near table, or a retreat's
+    # end; in trunk) only widens to this tuck, in the time its arm needs for that, and the
+    # rise and reach may begin as soon as the hand is free. (Standing picks from a tucked
+    # start had no time for a full 0.4 s tuck as well, kept the straight reach and cut the
+    # table's near edge with the hands: envelope seed 11, standing-hold-010 fell backwards.)
+    tx, _, tz = k.HAND_TUCK_IN_TRUNK
+    if cur.frame == "trunk" and abs(cur.point[0] - tx) + abs(cur.point[2] - tz) < 1e-9:
+        tuck_time = rest_to_rest_duration(math.dist(cur.point, tuck.point))
+    else:
+        tuck_time = k.TUCK_DURATION
     # Latest tuck first (the hands stay out as long as they can), then earlier ones; for each,
     # the earliest reach start from which the rest is clear.
-    t_tuck1_latest = min(
-        max(t_hit - k.TUCK_LEAD, t_free + k.TUCK_DURATION), t_end - k.REACH_MIN_DURATION
+    t_tuck1_latest = max(
+        min(max(t_hit - k.TUCK_LEAD, t_free + tuck_time), t_end - k.REACH_MIN_DURATION),
+        t_free + tuck_time,
     )
     best, best_gap = direct, c_direct.minimum
     t_tuck1 = t_tuck1_latest
     while True:
-        t_tuck0 = max(t_free, t_tuck1 - k.TUCK_DURATION)
-        if t_tuck1 <= t_tuck0:
+        t_tuck0 = max(t_free, t_tuck1 - tuck_time)
+        if tuck_time > 0.0 and t_tuck1 <= t_tuck0:
             break
-        tuck = tuck_waypoint(hand, tuck_y)
-        w_tuck = HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")
+        moves = [HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")] if tuck_time else []
         # From the tucked pose (below table tops) the hand first rises close to the body to
         # the target's height, then reaches out level: a straight line from below a table's
         # top to a point above it would cut the table's near edge.
@@ -208,7 +219,7 @@ def approach_segments(
         for j in range(n + 1):
             t_r = t_first + j * k.REACH_START_STEP
             cand = [
-                w_tuck,
+                *moves,
                 HandSegment(t_r - k.TUCK_LIFT_DURATION, t_r, tuck, lifted, task_index, "lift"),
                 HandSegment(t_r, t_end, lifted, target, task_index, "reach"),
             ]
@@ -219,7 +230,7 @@ def approach_segments(
                 best, best_gap = cand, c.minimum
         if t_tuck0 <= t_free:
             break
-        t_tuck1 = max(t_tuck1 - k.TUCK_STEP, t_free + k.TUCK_DURATION)
+        t_tuck1 = max(t_tuck1 - k.TUCK_STEP, t_free + tuck_time)
     return best
 
 
