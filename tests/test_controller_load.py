@@ -4,9 +4,14 @@ controller's load bookkeeping only)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from plan_fixtures import scenario_from_text
 
-from locoplan.control.controller import LOAD_LEAD, LocoManipulationController
+from locoplan.control.controller import (
+    FOOT_FIXTURE_CLEARANCE,
+    LOAD_LEAD,
+    LocoManipulationController,
+)
 from locoplan.plan import compile_plan
 from locoplan.robot.description import load_robot_description
 from locoplan.robot.pinocchio_model import PinocchioRobot
@@ -54,3 +59,36 @@ def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
         assert mass[0] > 0.05 * hold.mass, t
         assert shift[0] < -0.1 * mass[0] / (ctl.mass + mass[0]), (t, shift)
         np.testing.assert_allclose(shift, expected, atol=1e-3)
+
+
+TURN_BETWEEN_FIXTURES = """
+version: 1
+name: turn-between-fixtures
+fixtures:
+  table: {kind: table, position: [0.0, 0.30, 0.0], size: [0.4, 0.3, 0.45]}
+tasks:
+  - {action: turn, angle: 90, start: 0.0, duration: 1.5}
+end: 2.0
+"""
+
+
+def test_footholds_keep_off_fixture_footprints() -> None:
+    """A foothold whose toe, sole site or heel would stand within FOOT_FIXTURE_CLEARANCE of a
+    fixture's footprint is moved out across the nearest side, by just enough (to 1 um); one
+    clear of it stays where it was."""
+    plan = compile_plan(scenario_from_text(TURN_BETWEEN_FIXTURES))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    # The table's near side is at y = 0.15; a foot yawed 90 deg points its toe at it.
+    near = 0.30 - 0.15
+    p = np.array([0.0, 0.10, 0.0])
+    ctl._off_footprints(p, np.pi / 2)
+    assert p[0] == pytest.approx(0.0, abs=1e-12)
+    assert p[1] + desc.foot_toe == pytest.approx(near - FOOT_FIXTURE_CLEARANCE, abs=1e-6)
+    clear = np.array([0.0, -0.10, 0.0])
+    ctl._off_footprints(clear, np.pi / 2)
+    np.testing.assert_array_equal(clear, [0.0, -0.10, 0.0])
+    # Yawed 0 the foot lies along the side: only its width counts.
+    side = np.array([0.05, 0.14, 0.0])
+    ctl._off_footprints(side, 0.0)
+    assert side[1] == pytest.approx(near - FOOT_FIXTURE_CLEARANCE, abs=1e-6)

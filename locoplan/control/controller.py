@@ -72,6 +72,10 @@ SUPPORTED_LOAD = 0.5
 # 80 envelope scripts (seed 1): with 0.6 s the unloaded robot stood for too long with its CoM
 # leaning back against a load it no longer held (pick-walk-drop fell 1.2 s after its release).
 LOAD_RELEASE_DECAY = 0.2
+# Gap (m) a planned foothold keeps between the foot's sole segment (toe to heel) and every
+# fixture's footprint: the sole spheres' and the foot box's 1 cm half-width plus 2 cm for the
+# swing foot's tracking error at touchdown (measured 1-2 cm in envelope transfers).
+FOOT_FIXTURE_CLEARANCE = 0.03
 FEET = ("L", "R")
 OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
@@ -292,7 +296,45 @@ class LocoManipulationController:
         p[:2] -= self._shift_now
         p[:2] += v_ref[1, :2] * stance_time / 2.0 + self.s.raibert_gain * (v_c[:2] - v_ref[0, :2])
         p[2] = 0.0
+        if self.plan.footprints:
+            self._off_footprints(p, yaw_td)
         return p, yaw_td
+
+    def _off_footprints(self, p: FloatArray, yaw: float) -> None:
+        """Move the foothold p (3,) (in place) out of every fixture's footprint grown by
+        FOOT_FIXTURE_CLEARANCE, for a foot yawed `yaw`: its toe, sole site and heel points are
+        pushed out across the nearest side, a few passes for corners and neighbours.
+
+        Why: fixtures are solid from the floor, and a turn in place between a table and a
+        target whose near edges are 0.15-0.25 m from the trunk axis sweeps the toes (0.09 m
+        ahead of the ankle, 0.1 m to its side) within a few cm of them; with the few cm the
+        trunk drifts under a load, the Raibert rule put feet on the fixtures' sides and the
+        robot tripped (envelope seed 11: a foot touched a fixture before 26 of 31 falls)."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        toe, heel = self.desc.foot_toe, -self.desc.foot_heel
+        points = ((toe * c, toe * s), (0.0, 0.0), (heel * c, heel * s))
+        grow = FOOT_FIXTURE_CLEARANCE
+        for _ in range(3):
+            moved = False
+            for fx, fy, fyaw, hx, hy in self.plan.footprints:
+                cf, sf = math.cos(fyaw), math.sin(fyaw)
+                for ox, oy in points:
+                    dx, dy = p[0] + ox - fx, p[1] + oy - fy
+                    u, v = cf * dx + sf * dy, -sf * dx + cf * dy
+                    du, dv = hx + grow - abs(u), hy + grow - abs(v)
+                    if du <= 0.0 or dv <= 0.0:
+                        continue
+                    if du < dv:
+                        step = math.copysign(du, u)
+                        p[0] += step * cf
+                        p[1] += step * sf
+                    else:
+                        step = math.copysign(dv, v)
+                        p[0] -= step * sf
+                        p[1] += step * cf
+                    moved = True
+            if not moved:
+                return
 
     # -- MPC -----------------------------------------------------------------------------------
     def _run_mpc(

@@ -104,4 +104,8 @@ def compile_plan(
         trunk=trunk,
         manipulation=manipulation,
         events=sort_events(events),
+        footprints=tuple(
+            (f.position[0], f.position[1], math.radians(f.yaw), f.size[0] / 2.0, f.size[1] / 2.0)
+            for f in scenario.fixtures.values()
+        ),
     )

@@ -100,6 +100,24 @@ def carry_forward(
     return min(max(ahead, lo), hi)
 
 
+def carry_in(depth: float) -> float:
+    """How far ahead of the trunk (m) a held box is carried once it has settled in: its near
+    face CARRY_BODY_CLEARANCE ahead of the trunk's front for a box reaching `depth` (m) from
+    its centre towards the trunk, within CARRY_IN_MIN and CARRY_FORWARD."""
+    return min(max(k.TRUNK_FRONT + k.CARRY_BODY_CLEARANCE + depth, k.CARRY_IN_MIN), k.CARRY_FORWARD)
+
+
+def settle_in(distance: float, available: float) -> tuple[float, float]:
+    """(how far, how long): the settling-in move over `distance` (m) in at most `available`
+    (s) with a rest-to-rest peak acceleration of CARRY_SETTLE_ACCEL, taking at least
+    CARRY_SETTLE_TIME; when the time is short the move goes only as far as it allows."""
+    c = 10.0 / math.sqrt(3.0)
+    needed = max(k.CARRY_SETTLE_TIME, math.sqrt(c * max(distance, 0.0) / k.CARRY_SETTLE_ACCEL))
+    if needed <= available:
+        return distance, needed
+    return min(distance, k.CARRY_SETTLE_ACCEL * available * available / c), available
+
+
 def beside(p: Vec3, d: float, lx: float, ly: float) -> Vec3:
     """p moved horizontally by d along the unit vector (lx, ly)."""
     return (p[0] + d * lx, p[1] + d * ly, p[2])

@@ -12,7 +12,7 @@ themselves (approach, retreat, throw line) are `locoplan.plan.hand_paths`. Geome
   (it hangs level from the two point grips) and picked with PICK_CARRIED's phases, otherwise
   at its centre with PICK_STANDING's. After the grip the object is raised straight up, then
   brought up to CARRY_HEIGHT in trunk as far ahead as it was picked, and settles in to
-  CARRY_FORWARD while the hands are free.
+  `carry_in` (its near face a few cm from the trunk) while the hands are free.
 - drop: the object's centre goes to `at`, or onto the fixture's top at the fully supported
   point nearest the robot's planned position at the release instant; the grasp axis is across
   the robot-to-target direction. The object hovers above the place point (moving with the
@@ -47,12 +47,14 @@ from locoplan.plan.hand_paths import (
     approach_segments,
     beside,
     carry_forward,
+    carry_in,
     clear_throw_line,
     default_waypoint,
     grip_height,
     initial_waypoint,
     rest_to_rest_duration,
     retreat_segments,
+    settle_in,
     throw_line,
     tuck_waypoint,
     world_to_trunk,
@@ -330,9 +332,14 @@ class _Builder:
         forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
         half_z = half_extents(obj)[2]
         swept_top = self.carry_top(task, obj, forward)
-        # Then, while the hands have nothing else to do, the object comes in to CARRY_FORWARD
+        # Then, while the hands have nothing else to do, the object comes in to `carry_in`
         # slowly enough not to set it swinging (closer is lighter to balance and to turn with).
-        t_settle = min(task.end + k.CARRY_SETTLE_TIME, self.next_use(task))
+        t_settle = self.next_use(task)
+        # A box carried through a walk or turn comes in close (`carry_in`: less yaw inertia and
+        # pitch moment while stepping); one held standing comes back to CARRY_FORWARD. (Pulled
+        # in from a far pick, a 7.5 kg box held standing saturated the shoulders and elbows of
+        # arms picked at full stretch: envelope seed 11, standing holds 8 of 15 against 12.)
+        inward = carry_in(support_half_width(obj, oyaw, ax, ay)) if moving else k.CARRY_FORWARD
         for h in hands:
             side = SIDE[h]
             pre = beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
@@ -374,11 +381,12 @@ class _Builder:
             self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
             self.add(h, HandSegment(t_raise, task.end, w_raised, w_carry, i, "carry"))
             t_end = task.end
-            settled = (k.CARRY_FORWARD, carry[1], carry[2])
-            if t_settle - task.end >= k.CARRY_SETTLE_MIN and abs(forward - k.CARRY_FORWARD) > 1e-3:
-                w_settled = HandWaypoint(settled, "trunk")
-                self.add(h, HandSegment(task.end, t_settle, w_carry, w_settled, i, "settle"))
-                t_end = t_settle
+            if t_settle - task.end >= k.CARRY_SETTLE_MIN and abs(forward - inward) > 1e-3:
+                dist, took = settle_in(abs(forward - inward), t_settle - task.end)
+                x_in = forward + math.copysign(dist, inward - forward)
+                w_settled = HandWaypoint((x_in, carry[1], carry[2]), "trunk")
+                self.add(h, HandSegment(task.end, task.end + took, w_carry, w_settled, i, "settle"))
+                t_end = task.end + took
             self.hand_holds[h] = name
             self.active[h].append((min(task.start, approach[0].t0), t_end))
         self.open_holds[name] = _OpenHold(

@@ -63,7 +63,9 @@ class Plan:
 
     `tasks`: sorted by planned start; `t_end`: simulation end (s); `end_shift`: how much
     quasi-static re-timing moved the end (s, 0 for dynamic); `gait_period`, `gait_swing`: the
-    scenario's nominal gait (each locomotion task's own fit is in `contacts.blocks`).
+    scenario's nominal gait (each locomotion task's own fit is in `contacts.blocks`);
+    `footprints`: each fixture's footprint on the floor as (x, y, yaw, half_x, half_y) (m, rad,
+    world), where no foot may stand or land (fixtures are solid from the floor up).
     """
 
     scenario_name: str
@@ -80,6 +82,7 @@ class Plan:
     trunk: TrunkPath
     manipulation: ManipulationPlan
     events: tuple[PlanEvent, ...]
+    footprints: tuple[tuple[float, float, float, float, float], ...] = ()
 
     # --- feet (sigma_C1, sigma_C2) ---------------------------------------------------------
     def foot_stance(self, foot: int | str, t: float | npt.ArrayLike) -> bool | BoolArray:
