@@ -10,7 +10,6 @@ from plan_fixtures import scenario_from_text
 from locoplan.control.controller import (
     FOOT_FIXTURE_CLEARANCE,
     LOAD_LEAD,
-    SHIFT_AT_RELEASE,
     LocoManipulationController,
 )
 from locoplan.plan import compile_plan
@@ -39,8 +38,7 @@ def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
     time (t + LOAD_LEAD) of the last instants before it lies past the release, where the plan
     has no object between the hands, and the shift there once fell to zero with the measured
     load still on (the CoM reference jumped 7 cm forward; envelope seed 11, transfer-008 fell
-    onto its target). Its size is m_o d / (m + m_o) for the load counted (`shift_mass`), times
-    the share `_release_ready` keeps, and
+    onto its target). Its size is m_o d / (m + m_o) for the load counted (`shift_mass`) and
     the object's planned offset d from the CoM reference, checked to 1 mm (the object path's
     cache rounds times to 1 us)."""
     plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
@@ -56,11 +54,10 @@ def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
         shift = ctl._com_shift(lead, mass, p_com)[0]
         obj = plan.object_positions(np.array([min(lead[0], hold.release - 1e-3)]))[0]
         d = obj[:2] - p_com[0, :2]
-        share = ctl._release_ready(np.array([t]))[0]  # see the test below
-        expected = -share * mass[0] / (ctl.mass + mass[0]) * d
+        expected = -mass[0] / (ctl.mass + mass[0]) * d
         # Forward is +x (robot_start yaw 0): backwards wherever load is counted.
         assert mass[0] > 0.05 * hold.mass, t
-        assert shift[0] < -0.1 * share * mass[0] / (ctl.mass + mass[0]), (t, shift)
+        assert shift[0] < -0.1 * mass[0] / (ctl.mass + mass[0]), (t, shift)
         np.testing.assert_allclose(shift, expected, atol=1e-3)
 
 
@@ -95,20 +92,3 @@ def test_footholds_keep_off_fixture_footprints() -> None:
     side = np.array([0.05, 0.14, 0.0])
     ctl._off_footprints(side, 0.0)
     assert side[1] == pytest.approx(near - FOOT_FIXTURE_CLEARANCE, abs=1e-6)
-
-
-def test_the_lean_against_a_load_halves_over_a_drop() -> None:
-    """The share of the held-load CoM shift the controller keeps: all of it while carrying,
-    falling smoothly over the drop to SHIFT_AT_RELEASE at the release (and no lower while the
-    shift still counts the object), so that neither the CoM of robot and load before the
-    release nor the robot's own after it is more than half the shift off the feet's centre."""
-    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
-    desc = load_robot_description("hector")
-    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
-    (hold,) = plan.holds
-    drop = next(t for t in plan.tasks if t.action == "drop")
-    times = np.array([hold.lift, drop.start - 1e-3, drop.start, hold.release, hold.release + 0.2])
-    share = ctl._release_ready(times)
-    np.testing.assert_allclose(share, [1.0, 1.0, 1.0, SHIFT_AT_RELEASE, SHIFT_AT_RELEASE])
-    inside = ctl._release_ready(np.linspace(drop.start, hold.release, 20))
-    assert np.all(np.diff(inside) <= 1e-12)

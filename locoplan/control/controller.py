@@ -76,9 +76,6 @@ LOAD_RELEASE_DECAY = 0.2
 # fixture's footprint: the sole spheres' and the foot box's 1 cm half-width plus 2 cm for the
 # swing foot's tracking error at touchdown (measured 1-2 cm in envelope transfers).
 FOOT_FIXTURE_CLEARANCE = 0.03
-# Share of the held-load CoM shift kept at a drop's release (see `_release_ready`): half,
-# because the line feet's toe and heel reach equally far (0.075 m) from their support centre.
-SHIFT_AT_RELEASE = 0.5
 FEET = ("L", "R")
 OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
@@ -609,31 +606,7 @@ class LocoManipulationController:
         From the lead times t_lead (n,) (the times concerned + LOAD_LEAD), the carried mass
         there (n,) kg and the CoM reference there (n, 3) m."""
         d = self._planned_object_positions(self._held_times(t_lead))[:, :2] - p_com[:, :2]
-        factor = self._release_ready(t_lead - LOAD_LEAD)
-        return -(factor * mass / (self.mass + mass))[:, None] * d
-
-    def _release_ready(self, times: FloatArray) -> FloatArray:
-        """Share (n,) of the held-load CoM shift kept at `times`: 1 while carrying; over a
-        drop, from its start to its release, it falls smoothly to SHIFT_AT_RELEASE, and stays
-        there while the shift still counts the object.
-
-        Why: leaning back by the whole m_o d / (m + m_o) puts the robot's own CoM that far
-        behind its feet's centre: for 5-6 kg at 0.3 m, 7-8 cm, at the heels' edge (0.075 m
-        behind the centre). The load goes off the hands within 0.1-0.3 s of the object
-        touching its support, faster than the CoM can come forward from there (the centre of
-        pressure is already at the heels), and robots fell backwards after their release.
-        With half of it kept, the CoM of robot and load sits half the shift ahead of the
-        centre while the load is on and the robot's own CoM half the shift behind it once it
-        is off: both within the toe's and the heel's 0.075 m."""
-        out = np.ones(np.shape(times))
-        t = np.asarray(times, dtype=float)
-        for t0, t1 in self._drop_windows:
-            t1 = max(t1, t0 + LOAD_RELEASE_DECAY)
-            u = np.clip((t - t0) / (t1 - t0), 0.0, 1.0)
-            share = 1.0 - (1.0 - SHIFT_AT_RELEASE) * u * u * (3.0 - 2.0 * u)
-            inside = (t >= t0) & (t < t1 + LOAD_LEAD + LOAD_RAMP_DOWN)
-            out = np.where(inside, out * share, out)
-        return out
+        return -(mass / (self.mass + mass))[:, None] * d
 
     def _held_times(self, t_lead: FloatArray) -> FloatArray:
         """Lead times (n,) at which to take the held object's planned position for the CoM
