@@ -95,19 +95,9 @@ THROW_SPEED_GAIN: Final = 1.0
 # Default (carry-ready) hand position of the LEFT hand in trunk (m); right hand mirrors y.
 HAND_DEFAULT_IN_TRUNK: Final = (0.28, 0.12, -0.05)
 # Carry pose of a held object's centre in trunk (m): ahead of and slightly below the origin.
-# CARRY_FORWARD is where objects are picked and carried from (and the throw's carry pose);
-# after the pick a held box comes in to `carry_in` (hand_paths): its near face
-# CARRY_BODY_CLEARANCE from the trunk's front (TRUNK_FRONT, HECTOR's trunk box half-depth,
-# MJCF `trunk_box`), at least CARRY_IN_MIN ahead (hands at 0.18 m ahead and 0.15 m below the
-# shoulders keep the elbow within 120 deg of its 150 deg range), at most CARRY_FORWARD.
-# Closer is a smaller pitch moment for the hips, shoulders and line feet and a smaller yaw
-# inertia to turn with (a 5 kg box at 0.30 m adds 0.45 kg m^2, 0.19 m: 0.18).
 CARRY_FORWARD: Final = 0.30
-TRUNK_FRONT: Final = 0.07
-CARRY_BODY_CLEARANCE: Final = 0.04
-CARRY_IN_MIN: Final = 0.18
 # A picked object is carried where it was picked within this distance of CARRY_FORWARD (m),
-# then brought in towards `carry_in` while the hands are free (at least CARRY_SETTLE_MIN, s),
+# then brought in to CARRY_FORWARD while the hands are free (at least CARRY_SETTLE_MIN, s),
 # no faster than a rest-to-rest move peaking at CARRY_SETTLE_ACCEL (m/s^2), which tilts a
 # hanging box by under 3 deg (at least CARRY_SETTLE_TIME, s).
 CARRY_FORWARD_RANGE: Final = 0.06

@@ -100,13 +100,6 @@ def carry_forward(
     return min(max(ahead, lo), hi)
 
 
-def carry_in(depth: float) -> float:
-    """How far ahead of the trunk (m) a held box is carried once it has settled in: its near
-    face CARRY_BODY_CLEARANCE ahead of the trunk's front for a box reaching `depth` (m) from
-    its centre towards the trunk, within CARRY_IN_MIN and CARRY_FORWARD."""
-    return min(max(k.TRUNK_FRONT + k.CARRY_BODY_CLEARANCE + depth, k.CARRY_IN_MIN), k.CARRY_FORWARD)
-
-
 def settle_in(distance: float, available: float) -> tuple[float, float]:
     """(how far, how long): the settling-in move over `distance` (m) in at most `available`
     (s) with a rest-to-rest peak acceleration of CARRY_SETTLE_ACCEL, taking at least

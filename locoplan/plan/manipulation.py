@@ -12,7 +12,7 @@ themselves (approach, retreat, throw line) are `locoplan.plan.hand_paths`. Geome
   (it hangs level from the two point grips) and picked with PICK_CARRIED's phases, otherwise
   at its centre with PICK_STANDING's. After the grip the object is raised straight up, then
   brought up to CARRY_HEIGHT in trunk as far ahead as it was picked, and settles in to
-  `carry_in` (its near face a few cm from the trunk) while the hands are free.
+  CARRY_FORWARD while the hands are free.
 - drop: the object's centre goes to `at`, or onto the fixture's top at the fully supported
   point nearest the robot's planned position at the release instant; the grasp axis is across
   the robot-to-target direction. The object hovers above the place point (moving with the
@@ -47,7 +47,6 @@ from locoplan.plan.hand_paths import (
     approach_segments,
     beside,
     carry_forward,
-    carry_in,
     clear_throw_line,
     default_waypoint,
     grip_height,
@@ -332,14 +331,12 @@ class _Builder:
         forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
         half_z = half_extents(obj)[2]
         swept_top = self.carry_top(task, obj, forward)
-        # Then, while the hands have nothing else to do, the object comes in to `carry_in`
+        # Then, while the hands have nothing else to do, the object comes in to CARRY_FORWARD
         # slowly enough not to set it swinging (closer is lighter to balance and to turn with).
+        # (Carried closer still, its near face 4 cm from the trunk: envelope seed 11 transfers
+        # 23/40 against 20, but pick-walk-drop.yaml fell after its release; not kept.)
         t_settle = self.next_use(task)
-        # A box carried through a walk or turn comes in close (`carry_in`: less yaw inertia and
-        # pitch moment while stepping); one held standing comes back to CARRY_FORWARD. (Pulled
-        # in from a far pick, a 7.5 kg box held standing saturated the shoulders and elbows of
-        # arms picked at full stretch: envelope seed 11, standing holds 8 of 15 against 12.)
-        inward = carry_in(support_half_width(obj, oyaw, ax, ay)) if moving else k.CARRY_FORWARD
+        inward = k.CARRY_FORWARD
         for h in hands:
             side = SIDE[h]
             pre = beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
