@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+from locoplan.plan.clearance import fixture_obstacle
 from locoplan.plan.errors import PlanError
 from locoplan.plan.events import PlanEvent, sort_events
 from locoplan.plan.footholds import build_footholds
@@ -105,7 +106,7 @@ def compile_plan(
         manipulation=manipulation,
         events=sort_events(events),
         footprints=tuple(
-            (f.position[0], f.position[1], math.radians(f.yaw), f.size[0] / 2.0, f.size[1] / 2.0)
-            for f in scenario.fixtures.values()
+            (o.center[0], o.center[1], o.yaw, o.half[0], o.half[1])
+            for o in (fixture_obstacle(n, f) for n, f in scenario.fixtures.items())
         ),
     )

@@ -336,7 +336,6 @@ class _Builder:
         # (Carried closer still, its near face 4 cm from the trunk: envelope seed 11 transfers
         # 23/40 against 20, but pick-walk-drop.yaml fell after its release; not kept.)
         t_settle = self.next_use(task)
-        inward = k.CARRY_FORWARD
         for h in hands:
             side = SIDE[h]
             pre = beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
@@ -378,9 +377,9 @@ class _Builder:
             self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
             self.add(h, HandSegment(t_raise, task.end, w_raised, w_carry, i, "carry"))
             t_end = task.end
-            if t_settle - task.end >= k.CARRY_SETTLE_MIN and abs(forward - inward) > 1e-3:
-                dist, took = settle_in(abs(forward - inward), t_settle - task.end)
-                x_in = forward + math.copysign(dist, inward - forward)
+            if t_settle - task.end >= k.CARRY_SETTLE_MIN and abs(forward - k.CARRY_FORWARD) > 1e-3:
+                dist, took = settle_in(abs(forward - k.CARRY_FORWARD), t_settle - task.end)
+                x_in = forward + math.copysign(dist, k.CARRY_FORWARD - forward)
                 w_settled = HandWaypoint((x_in, carry[1], carry[2]), "trunk")
                 self.add(h, HandSegment(task.end, task.end + took, w_carry, w_settled, i, "settle"))
                 t_end = task.end + took
