@@ -19,6 +19,7 @@ from locoplan import interrupt
 from locoplan.batch.job import Job, Outcome, Status
 from locoplan.exceptions import ScenarioError, SimulationError, SolverFailure
 from locoplan.plan import PlanError
+from locoplan.plan.errors import plan_error_message
 
 CRASH_ENV = "LOCOPLAN_TEST_CRASH"
 HANG_ENV = "LOCOPLAN_TEST_HANG"
@@ -59,7 +60,8 @@ def execute_job(job: Job, progress: Progress | None = None) -> Outcome:
     try:
         result = run_scenario(loaded.scenario, loaded.text, job.options, progress)
     except PlanError as exc:
-        return ended("error", f"cannot plan: {exc}")
+        where = str(exc) if exc.loc is None else plan_error_message(exc, job.source, job.text)
+        return ended("error", f"cannot plan: {where}")
     except (SolverFailure, SimulationError) as exc:
         return ended("error", f"run failed: {exc} (log up to the failure: {log_hint})")
     except Exception as exc:

@@ -118,6 +118,7 @@ def compare_command(
         write_compare_json,
     )
     from locoplan.plan import STRATEGIES, PlanError
+    from locoplan.plan.errors import plan_error_message
     from locoplan.report.compare_plots import plot_comparison
     from locoplan.report.compare_table import compare_table
     from locoplan.scenario.model import Scenario
@@ -170,7 +171,7 @@ def compare_command(
             )
         interrupt.check()
     except PlanError as exc:
-        _fail(EXIT_BAD_INPUT, f"{file}: cannot plan: {exc}")
+        _fail(EXIT_BAD_INPUT, plan_error_message(exc, file, text))
     except OSError as exc:
         if live and exc.errno is None:  # the live server's port
             _fail(EXIT_BAD_INPUT, f"--live: {exc}")

@@ -39,9 +39,12 @@ def plan_command(
 
     Prints the tasks with their planned start and end (re-timed for quasi-static),
     the stance/swing phases of each foot, the reach/grasp/carry/release phases
-    of each hand, the object-held intervals and a reference summary
-    (final position and yaw, total time).
-    Exit status 0, or 2 for a script that breaks the format.
+    of each hand, the object-held intervals, a reference summary
+    (final position and yaw, total time) and the static payload margins of
+    each carry and place pose (reach, worst torque ratio, centre of mass,
+    payload limit).
+    Exit status 0, or 2 for a script that breaks the format or that the
+    planner refuses (e.g. a load the robot cannot hold).
 
     Examples:
 
@@ -55,22 +58,29 @@ def plan_command(
     from pathlib import Path
 
     from locoplan.plan import STRATEGIES, PlanError, compile_plan
+    from locoplan.plan.errors import plan_error_message
+    from locoplan.plan.payload import payload_margins
+    from locoplan.report.payload_table import payload_table
     from locoplan.report.plan_table import plan_table
     from locoplan.scenario.model import Scenario
 
     if strategy is not None and strategy not in STRATEGIES:
         _fail(EXIT_BAD_INPUT, f"unknown --strategy '{strategy}'; allowed: {', '.join(STRATEGIES)}")
-    scenario, _ = _load_with_text_or_exit(file)
+    scenario, text = _load_with_text_or_exit(file)
     assert isinstance(scenario, Scenario)
     try:
         plan = compile_plan(scenario, strategy)
+        margins = payload_margins(plan, scenario.robot)
     except PlanError as exc:
-        shown = "<stdin>" if file == "-" else file
-        _fail(EXIT_BAD_INPUT, f"{shown}: cannot plan: {exc}")
+        _fail(EXIT_BAD_INPUT, plan_error_message(exc, file, text))
     out.print(plan_table(plan))
+    if margins:
+        out.print(payload_table(margins))
     if json_path is not None:
+        document = plan.to_dict()
+        document["payload"] = [m.to_dict() for m in margins]
         try:
-            Path(json_path).write_text(json.dumps(plan.to_dict(), indent=1) + "\n", "utf-8")
+            Path(json_path).write_text(json.dumps(document, indent=1) + "\n", "utf-8")
         except OSError as exc:
             _fail(EXIT_BAD_INPUT, f"cannot write {json_path}: {exc.strerror or exc}")
         err.print(f"wrote {json_path}", markup=False, emoji=False, highlight=False)

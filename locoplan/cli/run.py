@@ -98,6 +98,7 @@ def run_command(
 
     from locoplan import interrupt
     from locoplan.plan import STRATEGIES, PlanError
+    from locoplan.plan.errors import plan_error_message
     from locoplan.scenario.model import Scenario
 
     if strategy is not None and strategy not in STRATEGIES:
@@ -153,7 +154,7 @@ def run_command(
                 result = run_scenario(scenario, text, options, on_progress)
         interrupt.check()  # a signal that came while the run was ending
     except PlanError as exc:
-        _fail(EXIT_BAD_INPUT, f"{file}: cannot plan: {exc}")
+        _fail(EXIT_BAD_INPUT, plan_error_message(exc, file, text))
     except OSError as exc:
         if not live or exc.errno is not None:
             raise

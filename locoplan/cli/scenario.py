@@ -25,7 +25,9 @@ def validate_command(
     Prints 'ok   FILE (name, N tasks)' for a valid file,
     and 'FILE:LINE:COLUMN: message' for each problem of an invalid one.
     A script whose simulation would end after --max-sim-time (default one
-    hour simulated) is refused, with the wall time it would take.
+    hour simulated) is refused, with the wall time it would take. Each valid
+    script's plan is compiled, so that what the planner finds infeasible (a
+    carry or place pose the robot cannot hold statically) is reported here too.
     Exit status 0 when every file is valid, 2 otherwise.
 
     Examples:
@@ -35,6 +37,8 @@ def validate_command(
       cat my-task.yaml | locoplan validate -
     """
     from locoplan.exceptions import ScenarioError
+    from locoplan.plan import PlanError, compile_plan
+    from locoplan.plan.errors import InfeasiblePlanError, plan_error_message
     from locoplan.scenario import load_scenario_file
     from locoplan.scenario.limits import sim_time_issue
     from locoplan.scenario.source import MAX_BYTES
@@ -60,6 +64,15 @@ def validate_command(
             all_ok = False
             out.print(str(too_long), markup=False, emoji=False, highlight=False)
             continue
+        try:
+            compile_plan(loaded.scenario)
+        except InfeasiblePlanError as exc:
+            all_ok = False
+            message = plan_error_message(exc, name, loaded.text)
+            out.print(message, markup=False, emoji=False, highlight=False)
+            continue
+        except PlanError:
+            pass  # what the format allows; `plan` and `run` say why it cannot be planned
         n = len(loaded.scenario.tasks)
         shown = "<stdin>" if name == "-" else name
         summary = f"ok   {shown} ({loaded.scenario.name}, {n} task{'' if n == 1 else 's'})"

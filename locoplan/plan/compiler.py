@@ -11,6 +11,7 @@ from locoplan.plan.events import PlanEvent, sort_events
 from locoplan.plan.footholds import build_footholds
 from locoplan.plan.gait import FOOT_NAMES, build_contact_schedule
 from locoplan.plan.manipulation import build_manipulation
+from locoplan.plan.payload import check_payload
 from locoplan.plan.plan import Plan
 from locoplan.plan.tasks import plan_tasks, retime_quasi_static
 from locoplan.plan.trunk import build_trunk_path
@@ -34,7 +35,9 @@ def compile_plan(
     locomotion and manipulation never overlap); None takes the scenario's. `base_height`: trunk
     origin height of the reference (m); `foot_width`: lateral distance between the feet (m).
     Raises `PlanError` for a scenario the compiler cannot honour (overlapping locomotion, an
-    object not held when dropped, an unknown object or fixture, a task ending after `end`).
+    object not held when dropped, an unknown object or fixture, a task ending after `end`),
+    and for a carry or place pose the robot cannot hold statically (`locoplan.plan.payload`:
+    `infeasible (payload)` / `infeasible (balance)`, located at the task).
     """
     strategy = scenario.strategy if strategy is None else strategy
     if strategy not in STRATEGIES:
@@ -90,7 +93,7 @@ def compile_plan(
             events.append(PlanEvent(b, "touchdown", owner, name))
     events.extend(manipulation.events)
 
-    return Plan(
+    plan = Plan(
         scenario_name=scenario.name,
         strategy=strategy,
         tasks=tasks,
@@ -110,3 +113,5 @@ def compile_plan(
             for o in (fixture_obstacle(n, f) for n, f in scenario.fixtures.items())
         ),
     )
+    check_payload(plan, scenario.robot)
+    return plan

@@ -136,6 +136,14 @@ def load_scenario_file(source: str | Path, text: str | bytes | None = None) -> L
     return LoadedScenario(scenario, src.path, src.text)
 
 
+def locate_issue(source: str | Path, text: str, issue: LocatedIssue) -> ScenarioIssue:
+    """The file position of `issue` (found after loading, e.g. by the plan compiler) in the
+    script `source` whose text is `text` (as `load_scenario_file` read it)."""
+    src = read_source(source, text)
+    line, column = parse_yaml(src).locate(issue.loc)
+    return ScenarioIssue(src.label, line, column, issue.message)
+
+
 def _semantic_view(doc: YamlDocument) -> Scenario | None:
     """The document's semantic sections alone, validated, when they are valid by themselves."""
     data = doc.data
