@@ -140,6 +140,9 @@ class MpcSettings:
     toe: float = 0.09
     heel: float = 0.06
     mu_torsion: float | None = None
+    # With mu_torsion: also the centre-of-pressure dependent yaw friction of a line foot
+    # (`locoplan.control.contact.yaw_friction_rows`).
+    yaw_friction: bool = True
     backend: str = "daqp"
     formulation: str = "condensed"
     qp: QpSettings = field(default_factory=_default_qp_settings)
