@@ -57,25 +57,22 @@ def wrench_rows(limits: ContactLimits) -> tuple[FloatArray, FloatArray, FloatArr
             [0.0, 0.0, -limits.heel, 1.0, 0.0],  # My' <= heel Fz
             [0.0, 0.0, -tz, 0.0, 1.0],  # Mz' <= mu_t Fz
             [0.0, 0.0, tz, 0.0, 1.0],  # Mz' >= -mu_t Fz
-            *(yaw_friction_rows(mu, limits.toe, limits.heel) if limits.yaw_friction else []),
         ]
     )
     lo = np.array([-inf, -inf, -inf, -inf, limits.f_min, 0.0, -inf, -inf, 0.0])
     hi = np.array([0.0, 0.0, 0.0, 0.0, limits.f_max, inf, 0.0, 0.0, inf])
     if limits.yaw_friction:
-        lo, hi = np.concatenate([lo, YAW_LO]), np.concatenate([hi, YAW_HI])
+        C_yaw, lo_yaw, hi_yaw = yaw_friction_rows(mu, limits.toe, limits.heel)
+        C = np.vstack([C, C_yaw])
+        lo, hi = np.concatenate([lo, lo_yaw]), np.concatenate([hi, hi_yaw])
     return C, lo, hi
 
 
-# Bounds of `yaw_friction_rows`: each row <= 0 (Mz' within +-mu times the force at the
-# toe or at the heel point, times the foot's length).
-YAW_LO = (-np.inf, -np.inf, -np.inf, -np.inf)
-YAW_HI = (0.0, 0.0, 0.0, 0.0)
-
-
-def yaw_friction_rows(mu: float, toe: float, heel: float) -> list[list[float]]:
-    """Rows (4, 5) on w5 = [Fx', Fy', Fz, My', Mz'], each <= 0: the yaw moment a line foot
-    can hold by friction depends on where its centre of pressure is.
+def yaw_friction_rows(
+    mu: float, toe: float, heel: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Rows (4, 5) on w5 = [Fx', Fy', Fz, My', Mz'] and their bounds lo, hi (each row <= 0):
+    the yaw moment a line foot can hold by friction depends on where its centre of pressure is.
 
     A line foot touches the ground at its toe (x = toe) and heel (x = -heel) points (the
     MJCF's sole spheres, `condim` 3: a point contact holds no moment about the normal). With
@@ -87,12 +84,15 @@ def yaw_friction_rows(mu: float, toe: float, heel: float) -> list[list[float]]:
     toe or the heel it allows nothing, and a stance foot asked for yaw there pivots about that
     point (seen: pick-walk-drop's stance feet turned 25-35 deg in single support, the hip yaw
     at its 30 deg limit, while the CoP sat near the toe under the carried box)."""
-    return [
-        [0.0, 0.0, -mu * toe, -mu, 1.0],  # Mz' - mu (toe Fz + My') <= 0
-        [0.0, 0.0, -mu * toe, -mu, -1.0],  # -Mz' - mu (toe Fz + My') <= 0
-        [0.0, 0.0, -mu * heel, mu, 1.0],  # Mz' - mu (heel Fz - My') <= 0
-        [0.0, 0.0, -mu * heel, mu, -1.0],  # -Mz' - mu (heel Fz - My') <= 0
-    ]
+    rows = np.array(
+        [
+            [0.0, 0.0, -mu * toe, -mu, 1.0],  # Mz' - mu (toe Fz + My') <= 0
+            [0.0, 0.0, -mu * toe, -mu, -1.0],  # -Mz' - mu (toe Fz + My') <= 0
+            [0.0, 0.0, -mu * heel, mu, 1.0],  # Mz' - mu (heel Fz - My') <= 0
+            [0.0, 0.0, -mu * heel, mu, -1.0],  # -Mz' - mu (heel Fz - My') <= 0
+        ]
+    )
+    return rows, np.full(4, -np.inf), np.zeros(4)
 
 
 def wrench5_to_world(yaw: float) -> FloatArray:

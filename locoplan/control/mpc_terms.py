@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from locoplan.control import mpc_kernels
-from locoplan.control.contact import YAW_HI, YAW_LO, yaw_friction_rows
+from locoplan.control.contact import yaw_friction_rows
 
 if TYPE_CHECKING:
     from locoplan.control.mpc import MpcInput, MpcSettings
@@ -192,9 +192,10 @@ def wrench_rows(s: MpcSettings) -> tuple[FloatArray, FloatArray, FloatArray]:
         rows += [[0.0, 0.0, -s.mu_torsion, 0.0, 1.0], [0.0, 0.0, s.mu_torsion, 0.0, 1.0]]
         lo += [-inf, 0.0]
         hi += [0.0, inf]
-    if s.mu_torsion is not None and s.yaw_friction:
-        # The yaw friction a line foot has depends on its centre of pressure (contact.py).
-        rows += yaw_friction_rows(mu, s.toe, s.heel)
-        lo += list(YAW_LO)
-        hi += list(YAW_HI)
+        if s.yaw_friction:
+            # The yaw friction a line foot has depends on its centre of pressure (contact.py).
+            C_yaw, lo_yaw, hi_yaw = yaw_friction_rows(mu, s.toe, s.heel)
+            rows += C_yaw.tolist()
+            lo += lo_yaw.tolist()
+            hi += hi_yaw.tolist()
     return np.array(rows), np.array(lo), np.array(hi)
