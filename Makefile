@@ -40,7 +40,7 @@ types: install
 	$(BIN)/mypy locoplan
 
 pytest: install
-	$(BIN)/pytest -q
+	$(BIN)/pytest -q -n auto --dist loadfile
 
 test: lint types pytest
 
