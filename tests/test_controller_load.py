@@ -38,9 +38,10 @@ def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
     time (t + LOAD_LEAD) of the last instants before it lies past the release, where the plan
     has no object between the hands, and the shift there once fell to zero with the measured
     load still on (the CoM reference jumped 7 cm forward; envelope seed 11, transfer-008 fell
-    onto its target). Its size is m_o d / (m + m_o) for the load counted (`shift_mass`) and
-    the object's planned offset d from the CoM reference, checked to 1 mm (the object path's
-    cache rounds times to 1 us)."""
+    onto its target). Its size is the share `_lean_share` (the plan's lean weight for this
+    5 kg hold) of m_o d / (m + m_o) for the load counted (`shift_mass`) and the object's
+    planned offset d from the CoM reference, checked to 1 mm (the object path's cache rounds
+    times to 1 us)."""
     plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
     desc = load_robot_description("hector")
     ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
@@ -54,10 +55,12 @@ def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
         shift = ctl._com_shift(lead, mass, p_com)[0]
         obj = plan.object_positions(np.array([min(lead[0], hold.release - 1e-3)]))[0]
         d = obj[:2] - p_com[0, :2]
-        expected = -mass[0] / (ctl.mass + mass[0]) * d
+        full = mass[0] / (ctl.mass + mass[0]) * d
+        share = ctl._lean_share(np.array([np.linalg.norm(full)]), np.array([hold.lean_weight]))
+        expected = -share[0] * full
         # Forward is +x (robot_start yaw 0): backwards wherever load is counted.
         assert mass[0] > 0.05 * hold.mass, t
-        assert shift[0] < -0.1 * mass[0] / (ctl.mass + mass[0]), (t, shift)
+        assert shift[0] < -0.05 * mass[0] / (ctl.mass + mass[0]), (t, shift)
         np.testing.assert_allclose(shift, expected, atol=1e-3)
 
 
@@ -92,3 +95,38 @@ def test_footholds_keep_off_fixture_footprints() -> None:
     side = np.array([0.05, 0.14, 0.0])
     ctl._off_footprints(side, 0.0)
     assert side[1] == pytest.approx(near - FOOT_FIXTURE_CLEARANCE, abs=1e-6)
+
+
+def test_lean_share_leaves_equal_centre_of_pressure_margins_loaded_and_unloaded() -> None:
+    """With lean weight 0, `_lean_share` (beta) splits the load shift s so that the loaded
+    combined CoM has as much room to the toes as the unloaded robot's CoM has to the heels:
+    t - (c - beta s + s) = (c - beta s) + h, with c the nominal CoM ahead of the sole site (the
+    pinocchio model at the nominal pose), checked to 1e-9 m for loads whose shift stays below
+    the support; weight w adds w of the rest (1 - beta), so w = 1 is the whole shift."""
+    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    c = ctl.com_offset[0] - np.mean(ctl.foot_offsets[:, 0])
+    toe, heel = desc.foot_toe, desc.foot_heel
+    sizes = np.array([0.02, 0.05, 0.08, 0.11])
+    beta = ctl._lean_share(sizes, np.zeros(4))
+    robot = c - beta * sizes
+    np.testing.assert_allclose(toe - (robot + sizes), robot + heel, atol=1e-9)
+    # HECTOR's nominal CoM sits over the middle of its support: half the shift for any load.
+    np.testing.assert_allclose(beta, 0.5, atol=0.02)
+    np.testing.assert_allclose(ctl._lean_share(sizes, np.ones(4)), 1.0, atol=1e-12)
+    half = ctl._lean_share(sizes, np.full(4, 0.5))
+    np.testing.assert_allclose(half, beta + 0.5 * (1.0 - beta), atol=1e-12)
+
+
+def test_lean_weights_follow_the_holds_shift_window() -> None:
+    """`_lean_weights` gives a hold's plan weight from its grasp to LOAD_RAMP_DOWN after its
+    release (the window the CoM shift counts its load in) and 1 elsewhere."""
+    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    (hold,) = plan.holds
+    t = np.array([hold.grasp - 0.01, hold.grasp + 0.01, hold.release - 0.01, 99.0])
+    np.testing.assert_array_equal(
+        ctl._lean_weights(t), [1.0, hold.lean_weight, hold.lean_weight, 1.0]
+    )

@@ -245,6 +245,11 @@ class LocoManipulationController:
         # Foot placement relative to the CoM (x: support centre under the CoM).
         self.foot_offset_from_com = self.foot_offsets - self.com_offset
         self.com_height = float(r.com_position[2])
+        # How far the nominal CoM stands ahead of the middle of the feet's support (m, along
+        # the feet; robot.yaml's toe and heel about the sole site): see `_lean_share`.
+        sole_x = float(np.mean(self.foot_offsets[:, 0]))
+        middle = sole_x + (self.desc.foot_toe - self.desc.foot_heel) / 2.0
+        self._support_offset = float(self.com_offset[0]) - middle
 
     # -- helpers -------------------------------------------------------------------------------
     def _com_reference(
@@ -592,10 +597,12 @@ class LocoManipulationController:
         return out
 
     def _com_shift(self, t_lead: FloatArray, mass: FloatArray, p_com: FloatArray) -> FloatArray:
-        """CoM reference shift (n, 2) for held loads: the combined CoM of robot and object over
-        the support centre. (m p_c + m_o p_o) = (m + m_o) s with p_o = p_c + d gives
-        p_c = s - m_o d / (m + m_o). Without it the MPC, which sees only 0.6 s ahead, does not
-        find the backward lean a held load needs (shared/controller-notes.md).
+        """CoM reference shift (n, 2) for held loads: the robot's CoM moves away from the
+        object by the share `_lean_share` of s = m_o d / (m + m_o), the shift that would put
+        the combined CoM of robot and object where the robot's own CoM stands unloaded
+        ((m p_c + m_o p_o) = (m + m_o) p with p_o = p_c + d gives p_c = p - s). Without it the
+        MPC, which sees only 0.6 s ahead, does not find the backward lean a held load needs
+        (shared/controller-notes.md).
 
         The shift leads the load by LOAD_LEAD: with the CoM still over the feet when an 8 kg
         load 0.35 m ahead comes on, its pitch torque (27 N m) exceeds what the line feet can
@@ -606,7 +613,48 @@ class LocoManipulationController:
         From the lead times t_lead (n,) (the times concerned + LOAD_LEAD), the carried mass
         there (n,) kg and the CoM reference there (n, 3) m."""
         d = self._planned_object_positions(self._held_times(t_lead))[:, :2] - p_com[:, :2]
-        return -(mass / (self.mass + mass))[:, None] * d
+        s = (mass / (self.mass + mass))[:, None] * d
+        share = self._lean_share(np.linalg.norm(s, axis=1), self._lean_weights(t_lead))
+        return -share[:, None] * s
+
+    def _lean_share(self, size: FloatArray, weight: FloatArray) -> FloatArray:
+        """Share (n,) of the full load shift of size `size` (n,) m that the CoM reference
+        takes, for the plan's lean weights `weight` (n,) (`ObjectHold.lean_weight`): the
+        equal-margin share beta plus `weight` of the rest, beta + w (1 - beta).
+
+        Why not always the whole s: the load is not on the robot at every instant the plan
+        says it is. It comes onto the hands as the object is lifted (later when the arms lag
+        their path), goes off within 0.1-0.3 s of the object touching its support, and the
+        measured hand load chatters +-30 %. With the whole s the robot's own CoM stands s
+        behind its nominal place: 7-11 cm for 5-8 kg held 0.3-0.37 m ahead, behind the heels
+        (6 cm behind the sole site), so it is balanced only while the whole load is on; robots
+        fell backwards when the load came late at a pick or went early at a drop (envelope
+        seed 11: walk-carry-009, 7.6 kg; transfers after their release). Why not always beta:
+        heavy holds need the whole shift (`locoplan.plan.payload.LEAN_RATIO_LOW`), so the plan
+        weights it by the hold's static torque ratio.
+
+        The equal-margin share: along the feet (line feet: support from `heel` behind to `toe`
+        ahead of the sole site, robot.yaml), the robot's own CoM stands `c` ahead of the sole
+        site at the nominal pose. Leaning back by beta s leaves the unloaded robot's CoM
+        c - beta s ahead of the sole site, heel margin h + c - beta s; the loaded combined CoM
+        is (1 - beta) s further forward, toe margin t - c - (1 - beta) s. Equal margins:
+        beta = 1/2 + (c - (t - h)/2) / s, clipped to [0, 1]. For HECTOR c = 0.015 m is the
+        support's middle, so beta = 1/2 for every load: both margins are (t + h - s) / 2."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            beta = 0.5 + self._support_offset / np.asarray(size, dtype=float)
+        beta = np.clip(np.nan_to_num(beta, nan=0.5, posinf=1.0, neginf=0.0), 0.0, 1.0)
+        return beta + np.asarray(weight, dtype=float) * (1.0 - beta)
+
+    def _lean_weights(self, t_lead: FloatArray) -> FloatArray:
+        """The plan's lean weight (n,) at the lead times t_lead (n,): the largest
+        `lean_weight` of the holds whose shift window (grasp to LOAD_RAMP_DOWN after the
+        release, as `shift_mass`) contains the time; 1 outside every hold (no load there)."""
+        t = np.asarray(t_lead, dtype=float)
+        out = np.full(t.shape, -1.0)
+        for h in self.plan.holds:
+            inside = (t >= h.grasp) & (t < h.release + LOAD_RAMP_DOWN)
+            out = np.where(inside, np.maximum(out, h.lean_weight), out)
+        return np.where(out < 0.0, 1.0, out)
 
     def _held_times(self, t_lead: FloatArray) -> FloatArray:
         """Lead times (n,) at which to take the held object's planned position for the CoM

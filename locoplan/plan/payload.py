@@ -23,7 +23,7 @@ which is an upper bound of the best ratio; the full search runs only when that b
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 from locoplan.exceptions import RobotDescriptionError
@@ -39,6 +39,23 @@ if TYPE_CHECKING:
     from locoplan.plan.statics import HeldPose, StaticAnalysis, StaticModel
 
 PoseKind = Literal["carry", "place"]
+
+# `lean_weight`: a held load's CoM lean is the controller's equal-margin share (about half the
+# shift that centres robot and load over the feet: the unloaded robot keeps as much room to its
+# heels as the loaded one to its toes, so a load that comes on late or goes off early does not
+# tip the robot backwards) for holds whose worst static torque ratio is at most
+# LEAN_RATIO_LOW, the whole shift from LEAN_RATIO_HIGH, linear between. Why heavy holds need
+# the whole shift: the lift's transient already takes hip and shoulder pitch to their limits
+# (14 kg standing hold, static ratio 0.69: peak ratio 1.0 with the whole shift); with 0.9 of
+# it the trunk sank 5.5 cm in the lift, the block went back onto its table and the measured
+# hand load, now near zero, took the lean away for good. With 0.5 or 0.6 of the shift the same
+# happened to the 10 kg hold (ratio 0.51), not with 0.7 or more. The thirds of the limit are
+# not fitted: they put every envelope transfer (0.5-6 kg, ratios 0.1-0.35) at or near the
+# equal-margin share, which was worth 8 of 60 transfers on seed 8080, and the 10 / 14 kg holds
+# at 0.77 / 1.0 of the shift. Checked on the standing-load sweep (0-14 kg, 0.30 m ahead) and
+# the envelope seeds 8080 and 4242 (README).
+LEAN_RATIO_LOW = 1.0 / 3.0
+LEAN_RATIO_HIGH = 2.0 / 3.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -116,29 +133,55 @@ def _pose(plan: Plan, hold: ObjectHold, task: int, label: str) -> tuple[HeldPose
     return HeldPose(plan.trunk.height, hands, points), t
 
 
+def _hold_poses(plan: Plan, hold: ObjectHold, model: StaticModel | None) -> list[PlannedHold]:
+    """The carry pose (with `model`, the worse of the pick's end and the settled pose; else
+    both) and, for a drop, the place pose of one hold of `plan`."""
+    carries = []
+    for label in ("carry", "settle"):
+        found = _pose(plan, hold, hold.pick_task, label)
+        if found is not None:
+            pose, t = found
+            carries.append(PlannedHold(hold.object, hold.mass, "carry", hold.pick_task, t, pose))
+    if model is not None and len(carries) > 1:
+        worst = max(carries, key=lambda c: model.ratio_at_centre(c.pose, c.mass))
+        carries = [worst]
+    out = carries
+    if hold.release_kind == "drop" and hold.release_task is not None:
+        found = _pose(plan, hold, hold.release_task, "lower")
+        if found is not None:
+            pose, t = found
+            out.append(PlannedHold(hold.object, hold.mass, "place", hold.release_task, t, pose))
+    return out
+
+
 def planned_holds(plan: Plan, model: StaticModel | None = None) -> tuple[PlannedHold, ...]:
     """The carry pose (with `model`, the worse of the pick's end and the settled pose; else
     both) and the place pose of every hold of `plan`, in pick order."""
-    out: list[PlannedHold] = []
+    return tuple(p for hold in plan.holds for p in _hold_poses(plan, hold, model))
+
+
+def lean_weight(ratio: float) -> float:
+    """The `ObjectHold.lean_weight` of a hold whose worst static torque ratio (carry or place
+    pose, `StaticModel.ratio_at_centre`: the shift that centres robot and load) is `ratio`:
+    0 up to LEAN_RATIO_LOW, 1 from LEAN_RATIO_HIGH (and for an unbalanced pose), linear
+    between (constants' docstring)."""
+    if not math.isfinite(ratio):
+        return 1.0
+    return min(max((ratio - LEAN_RATIO_LOW) / (LEAN_RATIO_HIGH - LEAN_RATIO_LOW), 0.0), 1.0)
+
+
+def with_lean_weights(plan: Plan, robot: str) -> Plan:
+    """`plan` with each hold's `lean_weight` set from its worst static torque ratio over its
+    carry and place poses (`lean_weight`); the ratios are those `check_payload` computed
+    (memoised in the robot's `StaticModel`)."""
+    if not plan.holds:
+        return plan
+    model = _model(robot)
+    holds = []
     for hold in plan.holds:
-        carries = []
-        for label in ("carry", "settle"):
-            found = _pose(plan, hold, hold.pick_task, label)
-            if found is not None:
-                pose, t = found
-                carries.append(
-                    PlannedHold(hold.object, hold.mass, "carry", hold.pick_task, t, pose)
-                )
-        if model is not None and len(carries) > 1:
-            worst = max(carries, key=lambda c: model.ratio_at_centre(c.pose, c.mass))
-            carries = [worst]
-        out.extend(carries)
-        if hold.release_kind == "drop" and hold.release_task is not None:
-            found = _pose(plan, hold, hold.release_task, "lower")
-            if found is not None:
-                pose, t = found
-                out.append(PlannedHold(hold.object, hold.mass, "place", hold.release_task, t, pose))
-    return tuple(out)
+        ratios = [model.ratio_at_centre(p.pose, p.mass) for p in _hold_poses(plan, hold, model)]
+        holds.append(replace(hold, lean_weight=lean_weight(max(ratios, default=0.0))))
+    return replace(plan, manipulation=replace(plan.manipulation, holds=tuple(holds)))
 
 
 def _model(robot: str) -> StaticModel:
