@@ -10,14 +10,14 @@ from plan_fixtures import repo_scenario, scenario_files
 
 from locoplan.plan import Plan, compile_plan
 from locoplan.plan.constants import (
-    CARRY_FORWARD,
-    CARRY_FORWARD_RANGE,
+    CARRY_IN_GAP,
     CARRY_HEIGHT,
     GRASP_ABOVE_CENTRE,
     GRASP_SQUEEZE,
     HAND_DEFAULT_IN_TRUNK,
     HAND_RADIUS,
     HAND_TUCK_IN_TRUNK,
+    TRUNK_FRONT,
 )
 from locoplan.scenario import load_scenario
 
@@ -125,9 +125,12 @@ def test_pick_targets_and_carry_pose() -> None:
     assert grip.start.frame == "world" and grip.end.frame == "world"
     assert grip.start.point == pytest.approx((-(0.10 + HAND_RADIUS), 0.35, z_grip), abs=1e-12)
     assert grip.end.point == pytest.approx((-(0.10 - GRASP_SQUEEZE), 0.35, z_grip), abs=1e-12)
-    # at the pick's end the hands are at the carry pose in the trunk frame: the box stays as
-    # far ahead as it was picked (0.35 m, within CARRY_FORWARD +- CARRY_FORWARD_RANGE) and
-    # CARRY_HEIGHT above the trunk origin
+    # the package is carried through the turn that follows: the raise pulls it in (world
+    # frame, along the approach +y) so that at the pick's end its near face is CARRY_IN_GAP
+    # from the trunk's front (its half depth 0.10 m), CARRY_HEIGHT above the trunk origin
+    raise_ = next(g for g in plan.manipulation.tracks[0].segments if g.label == "raise")
+    assert raise_.end.frame == "world" and raise_.end.point[0] == pytest.approx(grip.end.point[0])
+    assert raise_.end.point[1] < 0.35 - 0.05
     st = plan.trunk_reference_at(pick.end)
     ht = plan.hand_targets_at(pick.end, st.position, st.yaw)
     c, s = math.cos(st.yaw), math.sin(st.yaw)
@@ -138,10 +141,12 @@ def test_pick_targets_and_carry_pose() -> None:
             ht.p_L_world[2] - st.position[2],
         ]
     )
-    assert abs(0.35 - CARRY_FORWARD) <= CARRY_FORWARD_RANGE
+    ahead = TRUNK_FRONT + 0.10 + CARRY_IN_GAP
     assert local_l == pytest.approx(
-        [0.35, hold.half_width - GRASP_SQUEEZE, CARRY_HEIGHT + GRASP_ABOVE_CENTRE], abs=1e-12
+        [ahead, hold.half_width - GRASP_SQUEEZE, CARRY_HEIGHT + GRASP_ABOVE_CENTRE], abs=1e-12
     )
+    # and it stays there: no settling out to CARRY_FORWARD before the drop
+    assert not any(g.label == "settle" for g in plan.manipulation.tracks[0].segments)
     assert plan.hand_active("L", pick.start + 0.01)
     assert plan.hand_active("R", 0.5 * (pick.end + plan.tasks[3].start))  # carrying
 

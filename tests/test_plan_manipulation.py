@@ -12,7 +12,7 @@ from locoplan.plan import Plan, PlanError, compile_plan
 from locoplan.plan import constants as k
 from locoplan.plan.clearance import fixture_obstacle, track_clearance
 from locoplan.plan.geometry import ballistic_landing, support_half_width
-from locoplan.plan.hand_paths import grip_height, settle_in
+from locoplan.plan.hand_paths import carry_in, grip_height, settle_in
 from locoplan.scenario.model import ObjectSpec
 
 TIME_TOL = 1e-9  # float rounding of start + fraction * duration
@@ -66,10 +66,8 @@ def test_object_positions_follow_the_hands_while_held() -> None:
     plan = compile_plan(repo_scenario("package-transfer"))
     (hold,) = plan.holds
     pick = next(t for t in plan.tasks if t.action == "pick")
-    drop = next(t for t in plan.tasks if t.action == "drop")
-    settle = next(g for g in plan.manipulation.tracks[0].segments if g.label == "settle")
-    assert settle.t0 == pick.end and settle.t1 <= drop.start
-    times = np.array([0.0, hold.lift, pick.end, settle.t1, hold.release])
+    raise_ = next(g for g in plan.manipulation.tracks[0].segments if g.label == "raise")
+    times = np.array([0.0, hold.lift, raise_.t1, pick.end, hold.release])
     ref = plan.object_reference(times)
     trunk = plan.trunk_reference(times)
     assert ref.held.tolist() == [False, True, True, True, False]
@@ -79,16 +77,46 @@ def test_object_positions_follow_the_hands_while_held() -> None:
     # the moment of the object's weight). At lift-off it is still on the table.
     up = np.array([0.0, 0.0, hold.grip_height])
     assert ref.position[1] == pytest.approx(np.array([0.0, 0.35, 0.545]) + up, abs=1e-9)
-    # carried in the trunk frame: at the pick's end as far ahead as it was picked (0.35 m),
-    # then brought in towards CARRY_FORWARD while the hands are free, as far as the settling-in
-    # move gets in the time there is before the drop
-    moved, _ = settle_in(0.35 - k.CARRY_FORWARD, settle.t1 - settle.t0)
-    assert moved == pytest.approx(0.35 - k.CARRY_FORWARD)
-    for n, ahead in ((2, 0.35), (3, 0.35 - moved)):
-        yaw = trunk.yaw[n]
-        fwd = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-        expected = trunk.position[n] + ahead * fwd + np.array([0, 0, k.CARRY_HEIGHT]) + up
-        assert ref.position[n] == pytest.approx(expected, abs=1e-9)
+    # Carried through the turn that follows: the raise lifts it by raise_height and pulls it in
+    # along the approach (+y) to where it is carried, its near face CARRY_IN_GAP from the
+    # trunk's front (`carry_in`, half depth 0.10 m), held there in the trunk frame.
+    ahead = carry_in(0.10)
+    x, y, yaw, *_ = plan.trunk.pose_at(raise_.t1)
+    lifted = np.array([0.0, y + ahead, 0.545 + k.PICK_CARRIED.raise_height]) + up
+    assert ref.position[2] == pytest.approx(lifted, abs=1e-9)
+    yaw = trunk.yaw[3]
+    fwd = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    expected = trunk.position[3] + ahead * fwd + np.array([0, 0, k.CARRY_HEIGHT]) + up
+    assert ref.position[3] == pytest.approx(expected, abs=1e-9)
+
+
+HOLD_AND_PUT_BACK = """
+version: 1
+name: hold-and-put-back
+objects:
+  block: {shape: box, size: [0.211, 0.234, 0.169], mass: 6.0, position: [0.356, 0.0, 0.543]}
+fixtures:
+  table: {kind: table, position: [0.48, 0.0, 0.0], size: [0.4, 0.6, 0.459]}
+tasks:
+  - {action: stand, start: 0.0, duration: 0.5}
+  - {action: pick, object: block, start: 0.5, duration: 2.0}
+  - {action: stand, start: 2.5, duration: 3.0}
+  - {action: drop, object: block, onto: table, start: 5.5, duration: 1.5}
+end: 8.0
+"""
+
+
+def test_a_held_object_settles_in_when_the_robot_stands() -> None:
+    """Held standing (no locomotion until its drop), an object picked beyond CARRY_FORWARD
+    settles in to it while the hands are free, as far as the settling-in move gets."""
+    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    settle = next(g for g in plan.manipulation.tracks[0].segments if g.label == "settle")
+    carry = next(g for g in plan.manipulation.tracks[0].segments if g.label == "carry")
+    assert settle.t0 == pick.end
+    moved, _ = settle_in(abs(carry.end.point[0] - k.CARRY_FORWARD), settle.t1 - settle.t0)
+    assert abs(settle.end.point[0] - carry.end.point[0]) == pytest.approx(moved, abs=1e-12)
+    assert abs(settle.end.point[0] - k.CARRY_FORWARD) < abs(carry.end.point[0] - k.CARRY_FORWARD)
 
 
 def test_throw_target_is_the_ballistic_landing_point() -> None:

@@ -105,6 +105,20 @@ CARRY_SETTLE_TIME: Final = 0.8
 CARRY_SETTLE_MIN: Final = 0.3
 CARRY_SETTLE_ACCEL: Final = 0.45
 CARRY_HEIGHT: Final = 0.02
+# An object carried through a walk, turn or steps comes in during the pick's raise until its
+# near face is CARRY_IN_GAP (m) from the trunk's front, TRUNK_FRONT (m) ahead of the trunk
+# origin (robots/hector/hector.xml: `trunk_box`'s half length), and stays there (no settle
+# out to CARRY_FORWARD). Why: in single support one hip pitch carries the whole upper body and
+# the load; with the object's centre 0.30 m ahead the static single-support hip-pitch ratio
+# (pinocchio, 6-D sole wrench) is 0.77 at 7 kg and 0.87 at 8 kg, against 0.37 / 0.42 standing
+# on both feet, and the walk-carries of 5.4-7.8 kg saturated it in the first step after the
+# pick and fell (envelope seed 8080: 13 of 15 falls); at 0.20 m it is 0.54 / 0.60, and the
+# load's yaw inertia about the trunk axis drops by half. The gap covers the hands' tracking
+# error under load (2-3 cm, as TRUNK_POSITION_ERROR). Checked on envelope seed 8080's 30
+# walk-carries (0.5-8 kg, boxes 0.10-0.25 m: 24 succeeded against 14 carried at 0.30 m) and
+# its 60 transfers and 20 side-carries (47 and 17 against 45 and 17).
+TRUNK_FRONT: Final = 0.07
+CARRY_IN_GAP: Final = 0.03
 # A held object is carried with its bottom this far (m) above the top of every fixture it
 # can sweep over while held (see `ManipulationPlanner.swept_top`): 2 cm of clearance plus the
 # 2 cm by which the trunk sags under a carried 4-6 kg box (measured in the transfer family's

@@ -100,6 +100,13 @@ def carry_forward(
     return min(max(ahead, lo), hi)
 
 
+def carry_in(depth: float) -> float:
+    """How far ahead of the trunk (m) an object carried through locomotion is held: its near
+    face CARRY_IN_GAP from the trunk's front (TRUNK_FRONT), for an object reaching `depth`
+    (m) from its centre towards the robot (constants' docstring)."""
+    return k.TRUNK_FRONT + depth + k.CARRY_IN_GAP
+
+
 def settle_in(distance: float, available: float) -> tuple[float, float]:
     """(how far, how long): the settling-in move over `distance` (m) in at most `available`
     (s) with a rest-to-rest peak acceleration of CARRY_SETTLE_ACCEL, taking at least

@@ -47,6 +47,7 @@ from locoplan.plan.hand_paths import (
     approach_segments,
     beside,
     carry_forward,
+    carry_in,
     clear_throw_line,
     default_waypoint,
     grip_height,
@@ -334,19 +335,26 @@ class _Builder:
         lift = grip_height(obj) if moving else 0.0
         gz = oz + lift
         forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
+        # Carried through locomotion: in to `carry_in` during the raise (hand_paths), the
+        # raise pulling it in by `pull` (m, along the approach) as it goes up.
+        pull = 0.0
+        if moving:
+            x_in = carry_in(support_half_width(obj, oyaw, ax, ay))
+            if x_in < forward:
+                px, py, pyaw, *_ = self.trunk.pose_at(t_raise)
+                pull = max(0.0, math.cos(pyaw) * (ox - px) + math.sin(pyaw) * (oy - py) - x_in)
+                forward = x_in
         half_z = half_extents(obj)[2]
         swept_top = self.carry_top(task, obj, forward)
-        # Then, while the hands have nothing else to do, the object comes in to CARRY_FORWARD
-        # slowly enough not to set it swinging (closer is lighter to balance and to turn with).
-        # (Carried closer still, its near face 4 cm from the trunk: envelope seed 11 transfers
-        # 23/40 against 20, but pick-walk-drop.yaml fell after its release; not kept.)
+        # Then, for an object held standing, while the hands have nothing else to do, it comes
+        # in to CARRY_FORWARD slowly enough not to set it swinging.
         t_settle = self.next_use(task)
         for h in hands:
             side = SIDE[h]
             pre = beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
             touch = beside((ox, oy, gz), side * (half + k.HAND_RADIUS), lx, ly)
             grip = beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
-            raised = (grip[0], grip[1], gz + phases.raise_height)
+            raised = (grip[0] - pull * ax, grip[1] - pull * ay, gz + phases.raise_height)
             # Carried no lower than it was raised: a box picked from a table higher than the
             # carry pose would otherwise be lowered back towards that table's top while the
             # robot turns or walks away from it (its corner caught the table's edge).
@@ -382,7 +390,8 @@ class _Builder:
             self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
             self.add(h, HandSegment(t_raise, task.end, w_raised, w_carry, i, "carry"))
             t_end = task.end
-            if t_settle - task.end >= k.CARRY_SETTLE_MIN and abs(forward - k.CARRY_FORWARD) > 1e-3:
+            settles = not moving and abs(forward - k.CARRY_FORWARD) > 1e-3
+            if settles and t_settle - task.end >= k.CARRY_SETTLE_MIN:
                 dist, took = settle_in(abs(forward - k.CARRY_FORWARD), t_settle - task.end)
                 x_in = forward + math.copysign(dist, k.CARRY_FORWARD - forward)
                 w_settled = HandWaypoint((x_in, carry[1], carry[2]), "trunk")
