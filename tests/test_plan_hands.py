@@ -10,8 +10,8 @@ from plan_fixtures import repo_scenario, scenario_files
 
 from locoplan.plan import Plan, compile_plan
 from locoplan.plan.constants import (
-    CARRY_IN_GAP,
     CARRY_HEIGHT,
+    CARRY_IN_GAP,
     GRASP_ABOVE_CENTRE,
     GRASP_SQUEEZE,
     HAND_DEFAULT_IN_TRUNK,

@@ -81,7 +81,7 @@ def test_object_positions_follow_the_hands_while_held() -> None:
     # along the approach (+y) to where it is carried, its near face CARRY_IN_GAP from the
     # trunk's front (`carry_in`, half depth 0.10 m), held there in the trunk frame.
     ahead = carry_in(0.10)
-    x, y, yaw, *_ = plan.trunk.pose_at(raise_.t1)
+    _, y, _, *_ = plan.trunk.pose_at(raise_.t1)
     lifted = np.array([0.0, y + ahead, 0.545 + k.PICK_CARRIED.raise_height]) + up
     assert ref.position[2] == pytest.approx(lifted, abs=1e-9)
     yaw = trunk.yaw[3]
