@@ -272,6 +272,17 @@ class LocoManipulationController:
         v[:, 1] += w * (c * off[0] - s * off[1])
         return p, v, yaw, w, np.asarray(ref.position, dtype=float)
 
+    def _mid_stance_yaw(self, k: int, t_td: float, yaw_td: float) -> float:
+        """Reference yaw (rad) halfway between its values at foot k's touchdown t_td and at
+        the foot's next lift-off (a last stance counts one gait period), continuous with
+        yaw_td (the reference yaw at touchdown, which may be unwrapped): the yaw that centres
+        the trunk's turn over the stance on the foot."""
+        lift = self.plan.next_liftoff(k, t_td + 1e-9)
+        t_lift = t_td + self.plan.gait_period_at(t_td) if lift is None else lift
+        yaw_at_td = float(self.plan.trunk.pose_at(t_td)[2])
+        yaw_at_lift = float(self.plan.trunk.pose_at(t_lift)[2])
+        return yaw_td + 0.5 * wrap_angle(yaw_at_lift - yaw_at_td)
+
     def _foothold(
         self, k: int, t: float, t_td: float, p_c: FloatArray, v_c: FloatArray
     ) -> tuple[FloatArray, float]:
@@ -291,7 +302,18 @@ class LocoManipulationController:
         yaw_td: float,
     ) -> tuple[FloatArray, float]:
         """`_foothold` given the CoM reference now and at touchdown: p_ref and v_ref (2, 3)
-        rows [now, touchdown], yaw_td the reference yaw at touchdown (rad)."""
+        rows [now, touchdown], yaw_td the reference yaw at touchdown (rad).
+
+        The foot is yawed (and its offset from the CoM turned) halfway between the reference
+        yaws at its touchdown and at its next lift-off (`_mid_stance_yaw`), not to the
+        touchdown yaw: while the foot stands, the trunk turns on by the yaw swept over the
+        stance, so a foot landed at the touchdown yaw ends its stance that far behind the
+        trunk, all of it on one side of the hip yaw range; landed halfway it spans half of it
+        either way. At the envelope's fastest turns (90 deg/s average, the min-jerk peak
+        169 deg/s, stances of 0.15-0.3 s) the sweep reaches 25-50 deg, beyond HECTOR's
+        +-30 deg hip yaw: both hip yaws ran to +30 deg mid-turn and the robot fell (envelope
+        seed 8080, locomotion-009, -020, -036; all three succeed with it)."""
+        yaw_td = self._mid_stance_yaw(k, t_td, yaw_td)
         off = rot_z(yaw_td) @ self.foot_offset_from_com[k]
         stance_time = self.plan.gait_period_at(t_td) / 2.0
         # Relative to where the CoM would be without the held-load shift: the feet must keep
