@@ -1,5 +1,6 @@
-"""The controller's footholds in turns: each foot lands yawed to the trunk reference's yaw at
-the middle of its stance (no simulation: the plan and the controller's foothold rule only)."""
+"""The controller's footholds in turns: a foot whose stance the trunk turns over by more than
+the hip yaw's room lands turned on towards the turn (no simulation: the plan and the
+controller's foothold rule only)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,11 @@ import numpy as np
 import pytest
 from plan_fixtures import scenario_from_text
 
-from locoplan.control.controller import LocoManipulationController, wrap_angle
+from locoplan.control.controller import (
+    HIP_YAW_MARGIN,
+    LocoManipulationController,
+    wrap_angle,
+)
 from locoplan.plan import compile_plan
 from locoplan.robot.description import load_robot_description
 from locoplan.robot.pinocchio_model import PinocchioRobot
@@ -24,27 +29,35 @@ end: 3.5
 """
 
 
-def test_turning_footholds_take_the_mid_stance_yaw() -> None:
-    """For every touchdown of a fast turn (87 deg/s average, the envelope's top), the foot's
-    planned yaw is halfway between the reference yaws at its touchdown and at its next
-    lift-off (to 1e-9 rad); so the trunk's yaw relative to the foot over the stance (the hip
-    yaw the leg must hold) runs from -d/2 to +d/2 of its sweep d instead of 0 to d, within
-    HECTOR's +-30 deg hip yaw where d itself (over 30 deg here) is not."""
+def test_turning_footholds_keep_the_hip_yaw_within_its_room() -> None:
+    """For every touchdown of a fast turn (87 deg/s average, the envelope's top), the foot
+    lands turned on from the touchdown yaw by o = clip(d - R, 0, d / 2) towards the turn (d
+    the reference's turn over the stance, R the hip yaw room: HECTOR's 30 deg less
+    HIP_YAW_MARGIN), to 1e-9 rad; so the trunk's yaw relative to the foot over the stance (the
+    hip yaw the leg holds) stays within max(R, d / 2), under 30 deg, where landing at the
+    touchdown yaw would reach d, over 30 deg here. Slow stances (d <= R) land at the
+    touchdown yaw."""
     plan = compile_plan(scenario_from_text(FAST_TURN))
     desc = load_robot_description("hector")
     ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    room = math.radians(30.0) - HIP_YAW_MARGIN
+    assert ctl._hip_yaw_room == pytest.approx(room, abs=1e-9)
     p_c = np.array([0.0, 0.0, ctl.com_height])
-    worst_sweep = 0.0
+    sweeps = []
     for k in range(2):
         for t_td, t_next in plan.stance_intervals(k):
             if not 0.5 < t_td < 2.5 or not math.isfinite(t_next):
                 continue
             _, yaw = ctl._foothold(k, t_td - 0.05, t_td, p_c, np.zeros(3))
-            start = wrap_angle(plan.trunk.pose_at(t_td)[2] - yaw)
+            at_td = plan.trunk.pose_at(t_td)[2]
+            d = wrap_angle(plan.trunk.pose_at(t_next)[2] - at_td)
+            o = min(max(abs(d) - room, 0.0), abs(d) / 2)
+            assert wrap_angle(yaw - at_td) == pytest.approx(math.copysign(o, d), abs=1e-9)
+            start = wrap_angle(at_td - yaw)
             end = wrap_angle(plan.trunk.pose_at(t_next)[2] - yaw)
-            assert start == pytest.approx(-end, abs=1e-9), (k, t_td)
-            sweep = abs(end - start)
-            worst_sweep = max(worst_sweep, sweep)
-            assert abs(start) < math.radians(30.0)
-    # the turn is fast enough that landing at the touchdown yaw would leave the range
-    assert worst_sweep > math.radians(30.0)
+            assert max(abs(start), abs(end)) <= max(room, abs(d) / 2) + 1e-9, (k, t_td)
+            assert max(abs(start), abs(end)) < math.radians(30.0)
+            sweeps.append(abs(d))
+    # the turn is fast enough that landing at the touchdown yaw would leave the range, and
+    # its first and last stances are slow enough to land at the touchdown yaw
+    assert max(sweeps) > math.radians(30.0) and min(sweeps) < room
