@@ -297,10 +297,11 @@ class LocoManipulationController:
         (o = d / 2 centres the turn on the foot). At the envelope's fastest turns (90 deg/s
         average, the min-jerk peak 169 deg/s, stances of 0.15-0.3 s) d reaches 25-50 deg:
         both hip yaws ran to HECTOR's +30 deg mid-turn and the robot fell (envelope seed
-        8080, locomotion-009, -020, -036; all three succeed with the centred rule). Only as
-        much as the range needs: always centring every stance (o = d / 2) lost 3 of 60
-        transfers on each of seeds 8080 and 9191 (loaded turns at up to 65 deg/s, d up to
-        30 deg) against the locomotion it gained."""
+        8080, locomotion-009, -020, -036; all three succeed with it). Only as much as the
+        range needs: a larger o is a larger yaw rotation of the swing foot, whose reaction
+        the stance foot's little yaw friction must hold, and always centring every stance
+        (o = d / 2) lost 3 of 60 transfers on each of seeds 8080 and 9191 (loaded turns at up
+        to 65 deg/s, d up to 30 deg) against the locomotion it gained."""
         lift = self.plan.next_liftoff(k, t_td + 1e-9)
         t_lift = t_td + self.plan.gait_period_at(t_td) if lift is None else lift
         yaw_at_td = float(self.plan.trunk.pose_at(t_td)[2])
