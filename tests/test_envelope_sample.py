@@ -49,26 +49,11 @@ def test_generated_script_succeeds(tmp_path: Path, suite: dict[str, str], name: 
 
 
 DATA = Path(__file__).parent / "data" / "envelope"
-# Issue 12's four example scripts. One falls: walk-carry-6kg, 1.0 s into its walk with the
-# 6 kg box (it succeeded before the MPC took the held object's planned inertia; that change
-# gained 13 of 200 envelope scripts, seed 2026; README, Envelope). hold-11kg, which fell
-# after putting its block back, now succeeds. The fall is kept here, expected to fail, so
-# that the day it passes is seen.
-KNOWN_FALLS = {"walk-carry-6kg"}
+# Issue 12's four example scripts; all four succeed (walk-carry-6kg since its box is carried
+# close to the trunk through the loaded turn and walk: it fell 1.0 s into its walk before).
 
 
-@pytest.mark.parametrize(
-    "name",
-    [
-        pytest.param(
-            p.stem,
-            marks=pytest.mark.xfail(reason="falls (README, Envelope)", strict=False)
-            if p.stem in KNOWN_FALLS
-            else (),
-        )
-        for p in sorted(DATA.glob("*.yaml"))
-    ],
-)
+@pytest.mark.parametrize("name", [p.stem for p in sorted(DATA.glob("*.yaml"))])
 def test_issue_example_succeeds(tmp_path: Path, name: str) -> None:
     loaded = load_scenario_file(DATA / f"{name}.yaml")
     result = run_scenario(loaded.scenario, loaded.text, RunOptions(out_dir=tmp_path))

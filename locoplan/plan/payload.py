@@ -50,10 +50,11 @@ PoseKind = Literal["carry", "place"]
 # it the trunk sank 5.5 cm in the lift, the block went back onto its table and the measured
 # hand load, now near zero, took the lean away for good. With 0.5 or 0.6 of the shift the same
 # happened to the 10 kg hold (ratio 0.51), not with 0.7 or more. The thirds of the limit are
-# not fitted: they put every envelope transfer (0.5-6 kg, ratios 0.1-0.35) at or near the
-# equal-margin share, which was worth 8 of 60 transfers on seed 8080, and the 10 / 14 kg holds
-# at 0.77 / 1.0 of the shift. Checked on the standing-load sweep (0-14 kg, 0.30 m ahead) and
-# the envelope seeds 8080 and 4242 (README).
+# not fitted: they put every envelope transfer (0.5-6 kg, ratios up to 0.37) at or near the
+# equal-margin share, which was worth 8 of 60 transfers on seed 8080, and the 10 / 14 kg
+# standing-load holds (0.30 m ahead, ratios 0.51 / 0.69) at 0.77 / 1.0 of the shift, where a
+# constant share held them from 0.7 / only at 1.0. Checked on those two holds and on envelope
+# seeds 8080 and 9191, 200 scripts each (README).
 LEAN_RATIO_LOW = 1.0 / 3.0
 LEAN_RATIO_HIGH = 2.0 / 3.0
 
