@@ -93,7 +93,9 @@ def carry_forward(
     was picked (centre (ox, oy), m), seen from the planned trunk `pose` (x, y, yaw, ...) at the
     pick's end, within CARRY_FORWARD +- CARRY_FORWARD_RANGE. Two point grips leave the object
     free to swing about the grip axis (a pendulum with nothing to damp it), so the pick does
-    not pull it in horizontally in a hurry; it settles in to CARRY_FORWARD afterwards."""
+    not pull it in horizontally in a hurry; held standing, it settles in to CARRY_FORWARD
+    afterwards. (An object carried through locomotion comes in closer, to `carry_in`, during
+    the raise: the manipulation planner takes the smaller of the two.)"""
     x, y, yaw = pose[0], pose[1], pose[2]
     ahead = math.cos(yaw) * (ox - x) + math.sin(yaw) * (oy - y)
     lo, hi = k.CARRY_FORWARD - k.CARRY_FORWARD_RANGE, k.CARRY_FORWARD + k.CARRY_FORWARD_RANGE

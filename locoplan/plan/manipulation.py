@@ -10,9 +10,11 @@ themselves (approach, retreat, throw line) are `locoplan.plan.hand_paths`. Geome
   walks towards the object); the hands close until their spheres touch the sides, then press
   GRASP_SQUEEZE in. A box carried through a walk, turn or steps is gripped above its centre
   (it hangs level from the two point grips) and picked with PICK_CARRIED's phases, otherwise
-  at its centre with PICK_STANDING's. After the grip the object is raised straight up, then
-  brought up to CARRY_HEIGHT in trunk as far ahead as it was picked, and settles in to
-  CARRY_FORWARD while the hands are free.
+  at its centre with PICK_STANDING's. After the grip an object held standing is raised
+  straight up, then brought up to CARRY_HEIGHT in trunk as far ahead as it was picked, and
+  settles in to CARRY_FORWARD while the hands are free; one carried through locomotion is
+  pulled in as it is raised, to `carry_in` (its near face CARRY_IN_GAP from the trunk's
+  front), and stays there.
 - drop: the object's centre goes to `at`, or onto the fixture's top at the fully supported
   point nearest the robot's planned position at the release instant; the grasp axis is across
   the robot-to-target direction. The object hovers above the place point (moving with the
