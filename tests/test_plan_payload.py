@@ -106,6 +106,7 @@ def test_lean_weight_rises_with_the_holds_static_torque_ratio() -> None:
         worst = max(model.ratio_at_centre(p.pose, p.mass) for p in planned_holds(plan, model))
         assert hold.lean_weight == pytest.approx(lean_weight(worst), abs=1e-12), mass
         weights.append(hold.lean_weight)
+        assert plan.to_dict()["holds"][0]["lean_weight"] == hold.lean_weight  # `plan --json`
     assert weights[0] == 0.0 and 0.1 < weights[1] < 0.5 and weights[2] == 1.0, weights
 
 
