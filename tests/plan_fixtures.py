@@ -23,3 +23,21 @@ def repo_scenario(name: str) -> Scenario:
 def scenario_files() -> list[Path]:
     """Every scenario file shipped in scenarios/."""
     return sorted(SCENARIO_DIR.glob("*.yaml"))
+
+
+def hold_script(mass: float, robot: str | None = None) -> str:
+    """A standing hold from a table in front, put back (issue 12's hold-11kg geometry)."""
+    head = f"robot: {robot}\n" if robot else ""
+    return f"""version: 1
+name: hold
+{head}objects:
+  block: {{shape: box, size: [0.211, 0.234, 0.169], mass: {mass}, position: [0.356, 0.0, 0.543]}}
+fixtures:
+  table: {{kind: table, position: [0.48, 0.0, 0.0], size: [0.4, 0.6, 0.459]}}
+tasks:
+  - {{action: stand, start: 0.0, duration: 0.5}}
+  - {{action: pick, object: block, start: 0.5, duration: 2.0}}
+  - {{action: stand, start: 2.5, duration: 3.0}}
+  - {{action: drop, object: block, onto: table, start: 5.5, duration: 1.5}}
+end: 8.0
+"""

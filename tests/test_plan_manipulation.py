@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from plan_fixtures import repo_scenario, scenario_from_text
+from plan_fixtures import hold_script, repo_scenario, scenario_from_text
 
 from locoplan.plan import Plan, PlanError, compile_plan
 from locoplan.plan import constants as k
@@ -90,26 +90,10 @@ def test_object_positions_follow_the_hands_while_held() -> None:
     assert ref.position[3] == pytest.approx(expected, abs=1e-9)
 
 
-HOLD_AND_PUT_BACK = """
-version: 1
-name: hold-and-put-back
-objects:
-  block: {shape: box, size: [0.211, 0.234, 0.169], mass: 6.0, position: [0.356, 0.0, 0.543]}
-fixtures:
-  table: {kind: table, position: [0.48, 0.0, 0.0], size: [0.4, 0.6, 0.459]}
-tasks:
-  - {action: stand, start: 0.0, duration: 0.5}
-  - {action: pick, object: block, start: 0.5, duration: 2.0}
-  - {action: stand, start: 2.5, duration: 3.0}
-  - {action: drop, object: block, onto: table, start: 5.5, duration: 1.5}
-end: 8.0
-"""
-
-
 def test_a_held_object_settles_in_when_the_robot_stands() -> None:
     """Held standing (no locomotion until its drop), an object picked beyond CARRY_FORWARD
     settles in to it while the hands are free, as far as the settling-in move gets."""
-    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    plan = compile_plan(scenario_from_text(hold_script(6.0)))
     pick = next(t for t in plan.tasks if t.action == "pick")
     settle = next(g for g in plan.manipulation.tracks[0].segments if g.label == "settle")
     carry = next(g for g in plan.manipulation.tracks[0].segments if g.label == "carry")
