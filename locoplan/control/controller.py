@@ -304,8 +304,7 @@ class LocoManipulationController:
         to 65 deg/s, d up to 30 deg) against the locomotion it gained."""
         lift = self.plan.next_liftoff(k, t_td + 1e-9)
         t_lift = t_td + self.plan.gait_period_at(t_td) if lift is None else lift
-        yaw_at_td = float(self.plan.trunk.pose_at(t_td)[2])
-        d = wrap_angle(float(self.plan.trunk.pose_at(t_lift)[2]) - yaw_at_td)
+        d = wrap_angle(float(self.plan.trunk.pose_at(t_lift)[2]) - yaw_td)
         o = min(max(abs(d) - self._hip_yaw_room, 0.0), 0.5 * abs(d))
         return yaw_td + math.copysign(o, d)
 

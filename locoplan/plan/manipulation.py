@@ -343,8 +343,8 @@ class _Builder:
         if moving:
             x_in = carry_in(support_half_width(obj, oyaw, ax, ay))
             if x_in < forward:
-                px, py, pyaw, *_ = self.trunk.pose_at(t_raise)
-                pull = max(0.0, math.cos(pyaw) * (ox - px) + math.sin(pyaw) * (oy - py) - x_in)
+                ahead = world_to_trunk(self.trunk, t_raise, (ox, oy, oz))[0]
+                pull = max(0.0, ahead - x_in)
                 forward = x_in
         half_z = half_extents(obj)[2]
         swept_top = self.carry_top(task, obj, forward)
