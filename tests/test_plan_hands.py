@@ -19,7 +19,14 @@ from locoplan.plan.constants import (
     HAND_TUCK_IN_TRUNK,
     TRUNK_FRONT,
 )
+from locoplan.plan.hand_paths import pull_accel
 from locoplan.scenario import load_scenario
+
+
+def rest_to_rest(distance: float, mass: float) -> float:
+    """Duration (s) of the quintic rest-to-rest move over `distance` (m) peaking at
+    `pull_accel(mass)`: its peak acceleration is 10 / sqrt(3) d / T^2."""
+    return math.sqrt(10.0 / math.sqrt(3.0) * distance / pull_accel(mass))
 
 
 def _targets_along_plan(plan: Plan, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -126,13 +133,22 @@ def test_pick_targets_and_carry_pose() -> None:
     assert grip.start.point == pytest.approx((-(0.10 + HAND_RADIUS), 0.35, z_grip), abs=1e-12)
     assert grip.end.point == pytest.approx((-(0.10 - GRASP_SQUEEZE), 0.35, z_grip), abs=1e-12)
     # the package is carried through the turn that follows: the raise pulls it in (world
-    # frame, along the approach +y) so that at the pick's end its near face is CARRY_IN_GAP
-    # from the trunk's front (its half depth 0.10 m), CARRY_HEIGHT above the trunk origin
-    raise_ = next(g for g in plan.manipulation.tracks[0].segments if g.label == "raise")
+    # frame, along the approach +y) no faster than `pull_accel` for its 3 kg (a 0.3 s
+    # rest-to-rest move: some 2 cm), then, after the pick's end, the "pull" segment brings it
+    # in until its near face is CARRY_IN_GAP from the trunk's front (its half depth 0.10 m),
+    # CARRY_HEIGHT above the trunk origin
+    segments = plan.manipulation.tracks[0].segments
+    raise_ = next(g for g in segments if g.label == "raise")
+    pull = next(g for g in segments if g.label == "pull")
     assert raise_.end.frame == "world" and raise_.end.point[0] == pytest.approx(grip.end.point[0])
-    assert raise_.end.point[1] < 0.35 - 0.05
-    st = plan.trunk_reference_at(pick.end)
-    ht = plan.hand_targets_at(pick.end, st.position, st.yaw)
+    most = pull_accel(hold.mass) * (raise_.t1 - raise_.t0) ** 2 * math.sqrt(3.0) / 10.0
+    assert 0.0 < 0.35 - raise_.end.point[1] <= most + 1e-12
+    assert pull.t0 == pick.end and pull.t1 == pytest.approx(
+        pick.end + rest_to_rest(pull.start.point[0] - pull.end.point[0], hold.mass), abs=1e-12
+    )
+    assert pull.t1 < plan.tasks[3].start
+    st = plan.trunk_reference_at(pull.t1)
+    ht = plan.hand_targets_at(pull.t1, st.position, st.yaw)
     c, s = math.cos(st.yaw), math.sin(st.yaw)
     local_l = np.array(
         [

@@ -12,7 +12,7 @@ from locoplan.plan import Plan, PlanError, compile_plan
 from locoplan.plan import constants as k
 from locoplan.plan.clearance import fixture_obstacle, track_clearance
 from locoplan.plan.geometry import ballistic_landing, support_half_width
-from locoplan.plan.hand_paths import carry_in, grip_height, settle_in
+from locoplan.plan.hand_paths import carry_in, grip_height, pull_accel, settle_in
 from locoplan.scenario.model import ObjectSpec
 
 TIME_TOL = 1e-9  # float rounding of start + fraction * duration
@@ -67,7 +67,9 @@ def test_object_positions_follow_the_hands_while_held() -> None:
     (hold,) = plan.holds
     pick = next(t for t in plan.tasks if t.action == "pick")
     raise_ = next(g for g in plan.manipulation.tracks[0].segments if g.label == "raise")
-    times = np.array([0.0, hold.lift, raise_.t1, pick.end, hold.release])
+    pull = next(g for g in plan.manipulation.tracks[0].segments if g.label == "pull")
+    assert pick.end <= pull.t1 < hold.release
+    times = np.array([0.0, hold.lift, raise_.t1, pull.t1, hold.release])
     ref = plan.object_reference(times)
     trunk = plan.trunk_reference(times)
     assert ref.held.tolist() == [False, True, True, True, False]
@@ -77,13 +79,14 @@ def test_object_positions_follow_the_hands_while_held() -> None:
     # the moment of the object's weight). At lift-off it is still on the table.
     up = np.array([0.0, 0.0, hold.grip_height])
     assert ref.position[1] == pytest.approx(np.array([0.0, 0.35, 0.545]) + up, abs=1e-9)
-    # Carried through the turn that follows: the raise lifts it by raise_height and pulls it in
-    # along the approach (+y) to where it is carried, its near face CARRY_IN_GAP from the
-    # trunk's front (`carry_in`, half depth 0.10 m), held there in the trunk frame.
+    # Carried through the turn that follows: the raise lifts it by raise_height and starts
+    # pulling it in along the approach (+y); after the pick's end the pull brings it to where
+    # it is carried, its near face CARRY_IN_GAP from the trunk's front (`carry_in`, half depth
+    # 0.10 m), held there in the trunk frame.
     ahead = carry_in(0.10)
-    _, y, _, *_ = plan.trunk.pose_at(raise_.t1)
-    lifted = np.array([0.0, y + ahead, 0.545 + k.PICK_CARRIED.raise_height]) + up
+    lifted = np.array([0.0, raise_.end.point[1], 0.545 + k.PICK_CARRIED.raise_height]) + up
     assert ref.position[2] == pytest.approx(lifted, abs=1e-9)
+    assert ref.position[2][1] < 0.35 + up[1]
     yaw = trunk.yaw[3]
     fwd = np.array([math.cos(yaw), math.sin(yaw), 0.0])
     expected = trunk.position[3] + ahead * fwd + np.array([0, 0, k.CARRY_HEIGHT]) + up
@@ -326,3 +329,45 @@ def test_a_reach_from_the_tucked_pose_rises_before_it_goes_out() -> None:
         assert "lift" in labels, labels
         c = track_clearance(track, plan.trunk, table, 0.0, t_reach, k.APPROACH_CLEARANCE)
         assert c.first_below is None, c
+
+
+WALK_CARRY = """
+version: 1
+name: walk-carry
+objects:
+  box: {shape: box, size: [0.2, 0.2, 0.15], mass: MASS, position: [0.33, 0.0, 0.545]}
+fixtures:
+  table: {kind: table, position: [0.45, 0.0, 0.0], size: [0.4, 0.5, 0.47]}
+  platform: {kind: platform, position: [-0.45, -0.8, 0.0], size: [0.4, 0.5, 0.47]}
+tasks:
+  - {action: pick, object: box, start: 0.5, duration: 1.0}
+  - {action: turn, angle: -90, start: 1.6, duration: 1.6}
+  - {action: walk, distance: [0.0, -0.6], start: 3.2, duration: 2.4}
+  - {action: drop, object: box, onto: platform, start: 5.6, duration: 1.0}
+end: 7.0
+"""
+
+
+@pytest.mark.parametrize("mass", [2.0, 7.0])
+def test_the_pull_in_is_gentle_unless_a_heavy_object_must_be_in_before_the_first_step(
+    mass: float,
+) -> None:
+    """Carried through a turn and a walk, the box (0.33 m ahead, half depth 0.10 m) comes in
+    to `carry_in`. At 2 kg (m_o g d = 6.5 N m, under PULL_FAST_SHARE of the 33.5 N m leg
+    joints) the raise pulls it no faster than `pull_accel` and a "pull" segment after the
+    pick's end does the rest; at 7 kg (22.7 N m) it comes the whole way during the raise,
+    which the robot does standing on both feet (the turn starts 0.1 s after the pick)."""
+    plan = compile_plan(scenario_from_text(WALK_CARRY.replace("MASS", str(mass))))
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    segments = plan.manipulation.tracks[0].segments
+    raise_ = next(g for g in segments if g.label == "raise")
+    pulls = [g for g in segments if g.label == "pull"]
+    pulled = 0.33 - raise_.end.point[0]
+    if mass < 5.0:
+        most = pull_accel(mass) * (raise_.t1 - raise_.t0) ** 2 * math.sqrt(3.0) / 10.0
+        assert 0.0 < pulled <= most + 1e-12
+        (pull,) = pulls
+        assert pull.t0 == pick.end and pull.end.point[0] == pytest.approx(carry_in(0.10))
+    else:
+        assert not pulls
+        assert pulled == pytest.approx(0.33 - carry_in(0.10), abs=1e-9)

@@ -64,7 +64,8 @@ def compile_plan(
         tasks, start.position[0], start.position[1], math.radians(start.yaw), base_height
     )
     footholds = build_footholds(contacts, trunk, foot_width)
-    manipulation = build_manipulation(tasks, scenario, trunk)
+    swings = tuple(iv for f in range(2) for iv in contacts.swing_intervals(f))
+    manipulation = build_manipulation(tasks, scenario, trunk, swings, _leg_torque(scenario.robot))
 
     # Drops and throws are done by the hands that picked the object.
     hand_words = {("L", "R"): "both", ("L",): "left", ("R",): "right"}
@@ -115,3 +116,12 @@ def compile_plan(
     )
     check_payload(plan, scenario.robot)
     return with_lean_weights(plan, scenario.robot)
+
+
+def _leg_torque(robot: str) -> float:
+    """The torque limit (N m) of the robot's weakest leg joint (its description)."""
+    from locoplan.plan.statics import static_model
+
+    desc = static_model(robot).desc
+    legs = [int(i) for side in desc.leg_joint_indices for i in side]
+    return float(min(desc.torque_limits[legs]))

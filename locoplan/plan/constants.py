@@ -175,6 +175,23 @@ HAND_TUCK_IN_TRUNK: Final = (0.06, 0.15, -0.24)
 # it for balance. Retreats of 0.35 m in 0.28 s (26 m/s^2) and openings of 4 cm in 0.07 s
 # (47 m/s^2) saturated the shoulders and tipped the robot after the release (envelope seed 1).
 HAND_ACCEL_LIMIT: Final = 9.0
+# The arms' share of that mass (kg, both arms: 2 x 0.5 kg). An object of mass m_o pulled in
+# towards the trunk (`hand_paths.carry_in`) adds its own m_o a to the push, so its pull-in
+# peaks at HAND_ACCEL_LIMIT ARM_MOVING_MASS / (ARM_MOVING_MASS + m_o) (`hand_paths.pull_accel`;
+# 1.1 m/s^2 at 7 kg, 2.25 m/s^2 at 3 kg), the same 9 N on the trunk. Why: pulled in during the
+# raise alone (5-9 m/s^2, 30-50 N), a 5.5-7.2 kg box drew the trunk towards it and saturated
+# the stance hip pitch in the next single support (envelope seed 8080: transfer-004 at 2.28 s,
+# walk-carry-001 at 1.53 s, both then fell).
+ARM_MOVING_MASS: Final = 1.0
+# Except for a heavy object, whose weight alone, m_o g times how far ahead it was picked, would
+# take more than PULL_FAST_SHARE of the weakest leg joint's torque limit about the stance hip
+# in single support: it comes the whole way in during the raise when the robot stands on both
+# feet meanwhile (the two hips share the pull's reaction), so that it is in before the first
+# step. Why: pulled in no faster than `pull_accel`, 6.2-7.8 kg boxes were still 0.25-0.33 m
+# ahead in the first single support of the turn that followed and the stance hip pitch
+# saturated (envelope seed 8080: 5 walk-carries fell that the fast pull carried); a 3.7 kg box
+# pulled in fast drew the trunk after it and fell in the turn (transfer-001), slowly it did not.
+PULL_FAST_SHARE: Final = 0.5
 # Time (s) to raise a tucked hand to the height of its reach target before reaching out.
 TUCK_LIFT_DURATION: Final = 0.3
 # Time to move a hand into the tucked pose (s), and how long before the first predicted

@@ -109,15 +109,28 @@ def carry_in(depth: float) -> float:
     return k.TRUNK_FRONT + depth + k.CARRY_IN_GAP
 
 
-def settle_in(distance: float, available: float) -> tuple[float, float]:
+def settle_in(
+    distance: float,
+    available: float,
+    accel: float = k.CARRY_SETTLE_ACCEL,
+    least: float = k.CARRY_SETTLE_TIME,
+) -> tuple[float, float]:
     """(how far, how long): the settling-in move over `distance` (m) in at most `available`
-    (s) with a rest-to-rest peak acceleration of CARRY_SETTLE_ACCEL, taking at least
-    CARRY_SETTLE_TIME; when the time is short the move goes only as far as it allows."""
+    (s) with a rest-to-rest peak acceleration of `accel` (m/s^2; CARRY_SETTLE_ACCEL for a
+    hold standing still, `pull_accel` for one carried through locomotion), taking at least
+    `least` (s); when the time is short the move goes only as far as it allows."""
     c = 10.0 / math.sqrt(3.0)
-    needed = max(k.CARRY_SETTLE_TIME, math.sqrt(c * max(distance, 0.0) / k.CARRY_SETTLE_ACCEL))
+    needed = max(least, math.sqrt(c * max(distance, 0.0) / accel))
     if needed <= available:
         return distance, needed
-    return min(distance, k.CARRY_SETTLE_ACCEL * available * available / c), available
+    return min(distance, accel * available * available / c), available
+
+
+def pull_accel(mass: float) -> float:
+    """Peak acceleration (m/s^2) of a held object of `mass` (kg) pulled in towards the trunk
+    (`carry_in`): the arms and the object then push the trunk with (ARM_MOVING_MASS + mass) a,
+    held to the force HAND_ACCEL_LIMIT gives the empty arms (constants' docstring)."""
+    return k.HAND_ACCEL_LIMIT * k.ARM_MOVING_MASS / (k.ARM_MOVING_MASS + max(mass, 0.0))
 
 
 def beside(p: Vec3, d: float, lx: float, ly: float) -> Vec3:

@@ -13,8 +13,9 @@ themselves (approach, retreat, throw line) are `locoplan.plan.hand_paths`. Geome
   at its centre with PICK_STANDING's. After the grip an object held standing is raised
   straight up, then brought up to CARRY_HEIGHT in trunk as far ahead as it was picked, and
   settles in to CARRY_FORWARD while the hands are free; one carried through locomotion is
-  pulled in as it is raised, to `carry_in` (its near face CARRY_IN_GAP from the trunk's
-  front), and stays there.
+  pulled in to `carry_in` (its near face CARRY_IN_GAP from the trunk's front), no faster than
+  `pull_accel` allows for its mass: as far as that goes during the raise, the rest after the
+  pick's end (until its object's drop starts), and stays there.
 - drop: the object's centre goes to `at`, or onto the fixture's top at the fully supported
   point nearest the robot's planned position at the release instant; the grasp axis is across
   the robot-to-target direction. The object hovers above the place point (moving with the
@@ -36,6 +37,7 @@ from locoplan.plan.clearance import Obstacle, fixture_obstacle, object_obstacle
 from locoplan.plan.errors import PlanError
 from locoplan.plan.events import PlanEvent
 from locoplan.plan.geometry import (
+    GRAVITY,
     approach_direction,
     ballistic_landing,
     half_extents,
@@ -54,6 +56,7 @@ from locoplan.plan.hand_paths import (
     default_waypoint,
     grip_height,
     initial_waypoint,
+    pull_accel,
     rest_to_rest_duration,
     retreat_segments,
     settle_in,
@@ -184,6 +187,10 @@ class _Builder:
     events: list[PlanEvent] = field(default_factory=list)
     # When the run ends (s): how long a belt carries what is put on it.
     t_end: float = math.inf
+    # Lift-off and touchdown times (s) of every planned foot swing, both feet.
+    swings: tuple[tuple[float, float], ...] = ()
+    # The weakest leg joint's torque limit (N m).
+    leg_torque: float = math.inf
     # When each hand's last retreat ends (s): it may outlast its drop.
     retreat_end: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     initial: tuple[HandWaypoint, HandWaypoint] = field(
@@ -201,6 +208,10 @@ class _Builder:
             initial_waypoint(0, self.trunk, obstacles, min(self.next_hand_use(0, 0.0), last)),
             initial_waypoint(1, self.trunk, obstacles, min(self.next_hand_use(1, 0.0), last)),
         )
+
+    def steps_during(self, t0: float, t1: float) -> bool:
+        """Whether a foot swings (the robot stands on one foot) anywhere in [t0, t1] (s)."""
+        return any(a < t1 and b > t0 for a, b in self.swings)
 
     def current(self, h: int) -> HandWaypoint:
         return self.segments[h][-1].end if self.segments[h] else self.initial[h]
@@ -337,15 +348,23 @@ class _Builder:
         lift = grip_height(obj) if moving else 0.0
         gz = oz + lift
         forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
-        # Carried through locomotion: in to `carry_in` during the raise (hand_paths), the
-        # raise pulling it in by `pull` (m, along the approach) as it goes up.
+        # Carried through locomotion: in to `carry_in` (hand_paths). The raise pulls it in
+        # by `pull` (m, along the approach) as it goes up, no faster than `pull_accel` for its
+        # mass, and the rest of the way (to `x_in`, m ahead of the trunk) after the pick's end;
+        # a heavy object (PULL_FAST_SHARE) comes the whole way during the raise if the robot
+        # stands on both feet meanwhile (constants' ARM_MOVING_MASS).
         pull = 0.0
+        x_in = forward
+        accel = pull_accel(obj.mass)
         if moving:
-            x_in = carry_in(support_half_width(obj, oyaw, ax, ay))
-            if x_in < forward:
+            target = carry_in(support_half_width(obj, oyaw, ax, ay))
+            if target < forward:
                 ahead = world_to_trunk(self.trunk, t_raise, (ox, oy, oz))[0]
-                pull = max(0.0, ahead - x_in)
-                forward = x_in
+                pull = max(0.0, ahead - target)
+                heavy = obj.mass * GRAVITY * ahead > k.PULL_FAST_SHARE * self.leg_torque
+                if not heavy or self.steps_during(t_lift, t_raise):
+                    pull = min(pull, accel * (t_raise - t_lift) ** 2 * math.sqrt(3.0) / 10.0)
+                forward, x_in = max(target, ahead - pull), target
         half_z = half_extents(obj)[2]
         swept_top = self.carry_top(task, obj, forward)
         # Then, for an object held standing, while the hands have nothing else to do, it comes
@@ -395,9 +414,14 @@ class _Builder:
             settles = not moving and abs(forward - k.CARRY_FORWARD) > 1e-3
             if settles and t_settle - task.end >= k.CARRY_SETTLE_MIN:
                 dist, took = settle_in(abs(forward - k.CARRY_FORWARD), t_settle - task.end)
-                x_in = forward + math.copysign(dist, k.CARRY_FORWARD - forward)
-                w_settled = HandWaypoint((x_in, carry[1], carry[2]), "trunk")
+                x_to = forward + math.copysign(dist, k.CARRY_FORWARD - forward)
+                w_settled = HandWaypoint((x_to, carry[1], carry[2]), "trunk")
                 self.add(h, HandSegment(task.end, task.end + took, w_carry, w_settled, i, "settle"))
+                t_end = task.end + took
+            elif moving and forward - x_in > 1e-3 and t_settle > task.end:
+                dist, took = settle_in(forward - x_in, t_settle - task.end, accel, 0.0)
+                w_in = HandWaypoint((forward - dist, carry[1], carry[2]), "trunk")
+                self.add(h, HandSegment(task.end, task.end + took, w_carry, w_in, i, "pull"))
                 t_end = task.end + took
             self.hand_holds[h] = name
             self.active[h].append((min(task.start, approach[0].t0), t_end))
@@ -661,11 +685,24 @@ class _Builder:
 
 
 def build_manipulation(
-    tasks: tuple[PlannedTask, ...], scenario: Scenario, trunk: TrunkPath
+    tasks: tuple[PlannedTask, ...],
+    scenario: Scenario,
+    trunk: TrunkPath,
+    swings: tuple[tuple[float, float], ...] = (),
+    leg_torque: float = math.inf,
 ) -> ManipulationPlan:
-    """Hand tracks, contacts, object holds and targets for the sorted planned tasks."""
+    """Hand tracks, contacts, object holds and targets for the sorted planned tasks;
+    `swings`: the planned foot swings (lift-off, touchdown; s), both feet; `leg_torque`: the
+    weakest leg joint's torque limit (N m)."""
     shift = max((t.shift for t in tasks), default=0.0)
-    b = _Builder(scenario, trunk, tasks, t_end=scenario.end_time + shift)
+    b = _Builder(
+        scenario,
+        trunk,
+        tasks,
+        t_end=scenario.end_time + shift,
+        swings=swings,
+        leg_torque=leg_torque,
+    )
     for task in tasks:
         if task.action == "pick":
             b.pick(task)

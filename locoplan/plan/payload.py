@@ -136,9 +136,12 @@ def _pose(plan: Plan, hold: ObjectHold, task: int, label: str) -> tuple[HeldPose
 
 def _hold_poses(plan: Plan, hold: ObjectHold, model: StaticModel | None) -> list[PlannedHold]:
     """The carry pose (with `model`, the worse of the pick's end and the settled pose; else
-    both) and, for a drop, the place pose of one hold of `plan`."""
+    both) and, for a drop, the place pose of one hold of `plan`. An object pulled in after
+    the pick's end (a "pull" segment: carried through locomotion) is held where the pull
+    ends; where the pick ends it only passes, so that pose is not analysed."""
+    pulled = _pose(plan, hold, hold.pick_task, "pull") is not None
     carries = []
-    for label in ("carry", "settle"):
+    for label in ("pull",) if pulled else ("carry", "settle"):
         found = _pose(plan, hold, hold.pick_task, label)
         if found is not None:
             pose, t = found
