@@ -119,9 +119,15 @@ def compile_plan(
 
 
 def _leg_torque(robot: str) -> float:
-    """The torque limit (N m) of the robot's weakest leg joint (its description)."""
+    """The torque limit (N m) of the robot's weakest leg joint (its description); inf when
+    the description cannot be read (the payload check then says why, for plans that hold
+    something)."""
+    from locoplan.exceptions import RobotDescriptionError
     from locoplan.plan.statics import static_model
 
-    desc = static_model(robot).desc
+    try:
+        desc = static_model(robot).desc
+    except RobotDescriptionError:
+        return math.inf
     legs = [int(i) for side in desc.leg_joint_indices for i in side]
     return float(min(desc.torque_limits[legs]))
