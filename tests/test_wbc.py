@@ -18,6 +18,7 @@ from locoplan.control.contact import ContactLimits, wrench5_to_world
 from locoplan.control.qp import QpSettings, QpSolver
 from locoplan.control.tasks import build_tasks, rot_z
 from locoplan.control.wbc import (
+    TASK_DAMPING,
     AccelerationTask,
     StanceContact,
     WbcSettings,
@@ -26,6 +27,7 @@ from locoplan.control.wbc import (
 )
 
 NV = 22
+RECORDED_DAMPING = 1e-6  # what the recorded ticks' task stacks were solved with
 
 
 def _plain_prioritized(tasks: list[AccelerationTask], nv: int, damping: float) -> np.ndarray:
@@ -78,9 +80,9 @@ def test_projection_equals_the_plain_recursion_on_recorded_ticks() -> None:
     for i in range(n_ticks()):
         tasks = build_tasks(*task_args(i))
         got = prioritized_acceleration(tasks, NV)
-        want = _plain_prioritized(tasks, NV, 1e-6)
-        # qdd up to ~1e3 rad/s^2 on rank-deficient stacks (the swing level in the null space of
-        # the contacts and trunk): 1e-8 relative to that scale.
+        want = _plain_prioritized(tasks, NV, TASK_DAMPING)
+        # qdd up to ~1e3 rad/s^2 on rank-deficient stacks with damping 1e-6 (the swing level
+        # in the null space of the contacts and trunk): 1e-8 relative to that scale.
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-8 * max(1.0, np.abs(want).max()))
 
 
@@ -124,7 +126,8 @@ def test_priority_on_recorded_ticks(damping: float, tol: float) -> None:
 
 def _tick(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[StanceContact], np.ndarray]:
     rec = recording()
-    qdd = prioritized_acceleration(build_tasks(*task_args(i)), NV)
+    # The recording's ticks were made with damping 1e-6: the QP tests below check the QP.
+    qdd = prioritized_acceleration(build_tasks(*task_args(i)), NV, RECORDED_DAMPING)
     return rec["M"][i], rec["h"][i], qdd, contacts(i), rec["tau_ext"][i]
 
 
@@ -313,3 +316,19 @@ def test_joint_relaxation_meets_the_torque_limits_when_the_paper_qp_cannot(scale
         # The equalities to the solver's accuracy through M (entries < 10 kg m^2).
         np.testing.assert_allclose(M @ qdd_r + h, rhs, rtol=0, atol=1e-4)
     assert n_relaxed > 0
+
+
+@pytest.mark.parametrize("sigma", [1e-6, 1e-4, TASK_DAMPING**0.5, 0.1, 1.0])
+def test_a_near_singular_task_commands_bounded_accelerations(sigma: float) -> None:
+    """Damped least squares through a singular value sigma has gain sigma / (sigma^2 +
+    lambda), at most 1 / (2 sqrt(lambda)) (reached at sigma = sqrt(lambda)): a task that the
+    joints can barely move (a hand at full reach) gets a bounded command, not |r| / sigma."""
+    rng = np.random.default_rng(7)
+    U, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+    V, _ = np.linalg.qr(rng.standard_normal((NV, NV)))
+    J = U @ np.diag([1.0, 0.5, sigma]) @ V[:3]
+    r = 20.0 * U[:, 2]  # 20 m/s^2 along the weak direction
+    qdd = prioritized_acceleration([AccelerationTask(J, np.zeros(3), r)], NV)
+    gain = sigma / (sigma**2 + TASK_DAMPING)
+    assert np.linalg.norm(qdd) == pytest.approx(20.0 * gain, rel=1e-9)
+    assert np.linalg.norm(qdd) <= 20.0 / (2.0 * TASK_DAMPING**0.5) * (1 + 1e-9)

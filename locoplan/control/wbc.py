@@ -41,6 +41,21 @@ from locoplan.control.qp import LeanDenseQp, QpProblem, QpSettings, QpSolver
 FloatArray = npt.NDArray[np.float64]
 
 NV_BASE = 6
+# Damping (in the task's units squared: m^2 or rad^2 per rad^2) of every level's pseudo-inverse
+# in `prioritized_acceleration`. A damped least-squares step J' (J J' + lambda I)^-1 r maps
+# a task error of size |r| through a singular value sigma with gain sigma / (sigma^2 +
+# lambda) <= 1 / (2 sqrt(lambda)): 500 at this 1e-6, 16 at 1e-3. Where a level is (nearly)
+# rank-deficient in the null space of the levels above it (a swing foot's 4-6 rows on a
+# 5-DoF leg, a hand near full reach), 1e-6 commands 1000-15000 rad/s^2 of the joints, which
+# the WBC QP then relaxes against the torque limits (envelope seed 5150: arm and leg
+# relaxations over 500 rad/s^2 in each of four failed runs looked at; seed 9191
+# standing-hold-011: one tick's QP failed on it and commanded 12x a shoulder's limit).
+# Measured, not kept: 1e-3 raised envelope seed 5150 from 167 to 175 of 200 (dynamic) and
+# from 170 to 182 (quasi-static), but an object 0.9 m away (tests/test_manipulation.py,
+# out of reach) was then "picked": the arms, no longer stalled at full stretch, drew the
+# trunk 0.44 m towards it (11 cm down) and dragged the box, and the run passed. A larger
+# damping needs the reach enforced elsewhere first (a refusal, or a hand-task cap).
+TASK_DAMPING = 1e-6
 TORQUE_MARGIN = 1e-5  # N m inside the limits for the joint-relaxed QP's torque rows
 
 
@@ -62,7 +77,7 @@ def damped_pinv(J: FloatArray, damping: float) -> FloatArray:
 
 
 def prioritized_acceleration(
-    tasks: list[AccelerationTask], nv: int, damping: float = 1e-6
+    tasks: list[AccelerationTask], nv: int, damping: float = TASK_DAMPING
 ) -> FloatArray:
     """qdd (nv,) satisfying `tasks` in priority order (task 0 highest), each in the null space
     of the tasks above it.
@@ -80,7 +95,7 @@ def prioritized_acceleration(
 
 
 def prioritized_rows(
-    J: FloatArray, r: FloatArray, ends: npt.NDArray[np.int64], damping: float = 1e-6
+    J: FloatArray, r: FloatArray, ends: npt.NDArray[np.int64], damping: float = TASK_DAMPING
 ) -> FloatArray:
     """`prioritized_acceleration` on stacked rows: J (n, nv), r = xdd_des - Jdot v (n,), and
     the end row of each priority level (ends[-1] == n)."""
