@@ -36,8 +36,9 @@ class HandWaypoint:
 @dataclass(frozen=True, slots=True)
 class HandSegment:
     """Blend from `start` at t0 to `end` at t1 (s). `label` names the phase ("reach",
-    "squeeze", "grip", "raise", "carry", "hover", "lower", "open", "retract", "windup",
-    "accelerate", "follow", "return"); `task_index` is the scenario task it belongs to."""
+    "squeeze", "grip", "raise", "carry", "settle", "pull", "hover", "lower", "open", "retract",
+    "windup", "accelerate", "follow", "return"); `task_index` is the scenario task it belongs
+    to."""
 
     t0: float
     t1: float
