@@ -65,7 +65,10 @@ def compile_plan(
     )
     footholds = build_footholds(contacts, trunk, foot_width)
     swings = tuple(iv for f in range(2) for iv in contacts.swing_intervals(f))
-    manipulation = build_manipulation(tasks, scenario, trunk, swings, _leg_torque(scenario.robot))
+    # Only a plan that holds something needs the robot's statics (the payload check loads
+    # the same cached model): about 1 s in a fresh process, which locomotion need not pay.
+    leg_torque = _leg_torque(scenario.robot) if scenario.objects else math.inf
+    manipulation = build_manipulation(tasks, scenario, trunk, swings, leg_torque)
 
     # Drops and throws are done by the hands that picked the object.
     hand_words = {("L", "R"): "both", ("L",): "left", ("R",): "right"}

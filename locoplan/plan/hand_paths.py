@@ -37,11 +37,21 @@ def tuck_waypoint(hand: int, width: float) -> HandWaypoint:
     return HandWaypoint((x, SIDE[hand] * width, z), "trunk")
 
 
-def rest_to_rest_duration(distance: float) -> float:
+# Peak acceleration of the tracks' rest-to-rest quintic over d (m) in T (s): _QUINTIC_PEAK d / T^2.
+_QUINTIC_PEAK = 10.0 / math.sqrt(3.0)
+
+
+def rest_to_rest_duration(distance: float, accel: float = k.HAND_ACCEL_LIMIT) -> float:
     """Shortest duration (s) of a rest-to-rest hand move over `distance` (m) whose peak
-    acceleration, 10 / sqrt(3) d / T^2 for the tracks' quintic, stays within
-    HAND_ACCEL_LIMIT."""
-    return math.sqrt(10.0 / math.sqrt(3.0) * max(distance, 0.0) / k.HAND_ACCEL_LIMIT)
+    acceleration, 10 / sqrt(3) d / T^2 for the tracks' quintic, stays within `accel` (m/s^2,
+    HAND_ACCEL_LIMIT unless given)."""
+    return math.sqrt(_QUINTIC_PEAK * max(distance, 0.0) / accel)
+
+
+def rest_to_rest_distance(duration: float, accel: float) -> float:
+    """Farthest (m) a rest-to-rest hand move of `duration` (s) goes with its peak acceleration
+    within `accel` (m/s^2): the inverse of `rest_to_rest_duration`."""
+    return accel * duration * duration / _QUINTIC_PEAK
 
 
 def lifted_tuck_waypoint(
@@ -119,11 +129,10 @@ def settle_in(
     (s) with a rest-to-rest peak acceleration of `accel` (m/s^2; CARRY_SETTLE_ACCEL for a
     hold standing still, `pull_accel` for one carried through locomotion), taking at least
     `least` (s); when the time is short the move goes only as far as it allows."""
-    c = 10.0 / math.sqrt(3.0)
-    needed = max(least, math.sqrt(c * max(distance, 0.0) / accel))
+    needed = max(least, rest_to_rest_duration(distance, accel))
     if needed <= available:
         return distance, needed
-    return min(distance, accel * available * available / c), available
+    return min(distance, rest_to_rest_distance(available, accel)), available
 
 
 def pull_accel(mass: float) -> float:

@@ -57,6 +57,7 @@ from locoplan.plan.hand_paths import (
     grip_height,
     initial_waypoint,
     pull_accel,
+    rest_to_rest_distance,
     rest_to_rest_duration,
     retreat_segments,
     settle_in,
@@ -363,7 +364,7 @@ class _Builder:
                 pull = max(0.0, ahead - target)
                 heavy = obj.mass * GRAVITY * ahead > k.PULL_FAST_SHARE * self.leg_torque
                 if not heavy or self.steps_during(t_lift, t_raise):
-                    pull = min(pull, accel * (t_raise - t_lift) ** 2 * math.sqrt(3.0) / 10.0)
+                    pull = min(pull, rest_to_rest_distance(t_raise - t_lift, accel))
                 forward, x_in = max(target, ahead - pull), target
         half_z = half_extents(obj)[2]
         swept_top = self.carry_top(task, obj, forward)

@@ -139,10 +139,10 @@ def _hold_poses(plan: Plan, hold: ObjectHold, model: StaticModel | None) -> list
     both) and, for a drop, the place pose of one hold of `plan`. An object pulled in after
     the pick's end (a "pull" segment: carried through locomotion) is held where the pull
     ends; where the pick ends it only passes, so that pose is not analysed."""
-    pulled = _pose(plan, hold, hold.pick_task, "pull") is not None
+    poses = {lab: _pose(plan, hold, hold.pick_task, lab) for lab in ("carry", "settle", "pull")}
     carries = []
-    for label in ("pull",) if pulled else ("carry", "settle"):
-        found = _pose(plan, hold, hold.pick_task, label)
+    for label in ("pull",) if poses["pull"] is not None else ("carry", "settle"):
+        found = poses[label]
         if found is not None:
             pose, t = found
             carries.append(PlannedHold(hold.object, hold.mass, "carry", hold.pick_task, t, pose))
