@@ -115,7 +115,9 @@ def test_throw_lands_near_the_ballistic_prediction(tmp_path: Path) -> None:
     assert np.linalg.norm(landing - np.asarray(target.position)[:2]) < 0.15
 
 
-def test_out_of_reach_pick_is_a_failed_expectation(tmp_path: Path) -> None:
+def test_out_of_reach_pick_is_refused_before_simulating(tmp_path: Path) -> None:
+    """A box 0.9 m away: the plan's grasp reach check refuses the pick (exit 2) with where,
+    how far out of reach and what would make it feasible, and nothing is simulated."""
     import subprocess
     import sys
 
@@ -138,8 +140,10 @@ end: 2.0
         timeout=300,
         check=False,
     )
-    assert res.returncode == 1, res.stderr
+    assert res.returncode == 2, res.stdout + res.stderr
     assert "Traceback" not in res.stdout + res.stderr
-    # The failed expectation names the object and how far the hands stayed from it.
-    assert "pick.box" in res.stdout
-    assert "m from 'box'" in res.stdout
+    message = " ".join((res.stdout + res.stderr).split())
+    assert "too-far.yaml:8:5" in message
+    assert "infeasible (reach)" in message
+    assert "place the object nearer the robot" in message
+    assert not list(tmp_path.glob("*.mcap"))

@@ -50,13 +50,16 @@ def test_poses_of_a_plan_are_the_carry_and_the_place_points() -> None:
     plan = compile_plan(scenario_from_text(hold_script(11.0)))
     # Without a model both carry poses: where the pick leaves the box (as far ahead as it
     # was picked, 0.356 m) and where the hands then settle it in (CARRY_FORWARD, 0.30 m).
-    picked, settled, _ = planned_holds(plan)
+    grasp, picked, settled, _ = planned_holds(plan)
+    # The grasp pose: the grip points at the lift-off, the block still on its table (mass 0).
+    assert grasp.kind == "grasp" and grasp.mass == 0.0
+    assert grasp.pose.p_hands_trunk[0][0] == pytest.approx(0.356)
     assert picked.pose.p_hands_trunk[0][0] == pytest.approx(0.356)
     assert settled.pose.p_hands_trunk[0][0] == pytest.approx(0.30)
     holds = planned_holds(plan, static_model("hector"))
     kinds = [(h.kind, h.task_index) for h in holds]
-    assert kinds == [("carry", 1), ("place", 3)]
-    carry, place = holds
+    assert kinds == [("grasp", 1), ("carry", 1), ("place", 3)]
+    _, carry, place = holds
     assert carry == picked  # the worse of the two: further ahead
     # Carried standing: gripped at its centre, both hands at the same trunk-frame point
     # ahead, symmetric about the centre line, 0.01 m inside the box's 0.234 m width.
@@ -109,7 +112,7 @@ def test_check_refuses_the_place_pose_at_the_drop() -> None:
     plan = compile_plan(scenario_from_text(hold_script(1.0)))
     model = static_model("hector")
     margins: dict[str, float] = {}
-    for h in planned_holds(plan):  # both carry poses (picked and settled) and the place
+    for h in planned_holds(plan)[1:]:  # both carry poses (picked and settled) and the place
         limit = model.payload_limit(h.pose)
         margins[h.kind] = min(margins.get(h.kind, limit), limit)
     assert margins["place"] < margins["carry"] - 1.0
@@ -124,7 +127,10 @@ def test_check_refuses_the_place_pose_at_the_drop() -> None:
 
 
 def test_margins_below_the_limit() -> None:
-    [carry, place] = payload_margins(compile_plan(scenario_from_text(hold_script(11.0))), "hector")
+    [grasp, carry, place] = payload_margins(
+        compile_plan(scenario_from_text(hold_script(11.0))), "hector"
+    )
+    assert grasp.hold.kind == "grasp" and grasp.analysis.reach_margin > 0.0
     for m in (carry, place):
         a = m.analysis
         assert a.balanced and 0.5 < a.torque_ratio < 1.0 and a.joint.endswith("hip_pitch")
@@ -133,6 +139,39 @@ def test_margins_below_the_limit() -> None:
     row = carry.to_dict()
     assert row["pose"] == "carry" and row["task"] == 1 and row["mass"] == 11.0
     assert set(row) >= {"torque_ratio", "joint", "com_margin", "reach_margin", "payload_limit"}
+
+
+# A pick that starts early in a long turn (envelope seed 777, transfer-042): at its lift-off
+# the trunk still faces 38 deg away from the parcel, whose grip points are then 0.16 m out
+# of the arms' reach (in closed loop it missed the grasp by 0.114 m).
+EARLY_TURNING_PICK = """version: 1
+name: early-turning-pick
+gait: {period: 0.37, swing: 0.18}
+objects:
+  parcel: {shape: box, size: [0.144, 0.224, 0.196], mass: 1.02, position: [-0.286, 0.2, 0.644], yaw: 145.1}
+fixtures:
+  table: {kind: table, position: [-0.417, 0.291, 0.0], size: [0.402, 0.576, 0.546], yaw: 145.1}
+  platform: {kind: platform, position: [0.381, 0.1, 0.0], size: [0.316, 0.323, 0.475], yaw: 14.7}
+tasks:
+  - {action: turn, angle: 145.1, start: 0.0, duration: 3.69}
+  - {action: pick, object: parcel, start: %s, duration: 0.87}
+  - {action: turn, angle: -130.4, start: 3.69, duration: 2.08}
+  - {action: drop, object: parcel, onto: platform, start: 5.66, duration: 0.93}
+end: 7.59
+"""
+
+
+def test_grasp_out_of_reach_of_the_planned_trunk_is_refused_with_a_later_start() -> None:
+    with pytest.raises(PlanError) as info:
+        compile_plan(scenario_from_text(EARLY_TURNING_PICK % "1.94"))
+    exc = info.value
+    assert exc.loc == ("tasks", 1) and exc.task_index == 1
+    assert exc.message.startswith("infeasible (reach): at the lift-off of 'parcel'")
+    assert "m beyond the arms' reach" in exc.message
+    later = float(exc.message.split("start the pick at ")[1].split(" s")[0])
+    assert 1.94 < later < 2.81
+    # The advice holds: starting there, the plan reaches its grasp (and is not refused).
+    compile_plan(scenario_from_text(EARLY_TURNING_PICK % f"{later:.2f}"))
 
 
 def test_validate_plan_run_and_compare_refuse_with_file_line_column(tmp_path: Path) -> None:
@@ -211,12 +250,19 @@ def test_plan_prints_the_margins_and_writes_them_to_json(tmp_path: Path) -> None
     assert result.exit_code == 0, result.output
     out = " ".join(result.output.split())
     assert "static payload margins" in out
-    for text in ("block carry (task 1)", "block place (task 3)", "torque ratio 0.6", "hip_pitch"):
+    for text in (
+        "block grasp (task 1)",
+        "block carry (task 1)",
+        "block place (task 3)",
+        "torque ratio 0.6",
+        "hip_pitch",
+    ):
         assert text in out
     assert "reach margin" in out and "CoM margin" in out and "payload limit" in out
     rows = json.loads(js.read_text())["payload"]
-    assert [(r["pose"], r["task"]) for r in rows] == [("carry", 1), ("place", 3)]
-    assert all(r["torque_ratio"] < 1.0 and r["payload_limit"] > 11.0 for r in rows)
+    assert [(r["pose"], r["task"]) for r in rows] == [("grasp", 1), ("carry", 1), ("place", 3)]
+    assert all(r["torque_ratio"] < 1.0 and r["payload_limit"] > 11.0 for r in rows[1:])
+    assert rows[0]["mass"] == 0.0 and rows[0]["reach_margin"] > 0.0
 
 
 def test_plan_without_holds_prints_no_margins(tmp_path: Path) -> None:

@@ -138,6 +138,11 @@ GRASP_TOP_MARGIN: Final = 0.01
 # The contact targets lie this far inside the object's sides, so that the hands' Cartesian PD
 # presses on the object (m).
 GRASP_SQUEEZE: Final = 0.01
+# How near (m) a hand point must come to an object's surface for the hand to close on it: the
+# simulator's grasp model (locoplan.sim.grasp) and the plan's reach check of a grasp
+# (locoplan.plan.payload) share it. The hand sphere (HAND_RADIUS) touches the surface at 2 cm,
+# so a hand closing at 3 cm is 1 cm short of touching.
+GRASP_TOLERANCE: Final = 0.03
 
 # Minimum horizontal distance below which an approach direction is taken from the planned
 # heading instead of from the robot-to-object vector (m).

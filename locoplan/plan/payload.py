@@ -8,6 +8,17 @@ weight standing still:
 - place: at a drop's release, the hands at the place point ("lower" segment's end, world),
   seen from the planned trunk pose at that instant. Throws are not checked at their release
   (the object is accelerated there; the static analysis does not apply).
+- grasp: at a pick's lift-off, the hands at the grip points ("grip" segment's end, world, just
+  inside the object's sides), seen from the planned trunk pose then; mass 0 (the support
+  still bears the object). Only its reach matters: `check_grasp_reach` refuses a pick whose
+  grip points are more than GRASP_TOLERANCE + GRASP_SQUEEZE (4 cm) beyond what the arms reach
+  from that trunk pose: the hands then stay more than GRASP_TOLERANCE from the object's
+  sides, where the hands close (constants), at full stretch. On envelope seed 777 (200
+  scripts, 160 picks; the rule is not fitted to it) five grip points at lift-off were beyond
+  reach: by 0.164 and 0.073 m (two transfers whose pick starts early in a long turn: both
+  failed, one missing the grasp by 0.114 m; now refused), 0.036 m (a transfer: passed),
+  0.020 and 0.009 m (standing holds of 12.2 kg, which failed on its weight, and 2 kg, which
+  passed).
 
 Each pose goes through `locoplan.plan.statics` with the object's mass (robot facts from its
 description). `check_payload` refuses a plan whose static worst torque ratio exceeds 1.0, or
@@ -27,6 +38,7 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 from locoplan.exceptions import RobotDescriptionError
+from locoplan.plan import constants as k
 from locoplan.plan.errors import InfeasiblePlanError, PlanError
 from locoplan.plan.hands import HandSegment, Vec3
 from locoplan.plan.manipulation import HAND_NAMES, ObjectHold
@@ -38,7 +50,7 @@ if TYPE_CHECKING:
     from locoplan.plan.plan import Plan
     from locoplan.plan.statics import HeldPose, StaticAnalysis, StaticModel
 
-PoseKind = Literal["carry", "place"]
+PoseKind = Literal["grasp", "carry", "place"]
 
 # `lean_weight`: a held load's CoM lean is the controller's equal-margin share (about half the
 # shift that centres robot and load over the feet: the unloaded robot keeps as much room to its
@@ -56,14 +68,16 @@ PoseKind = Literal["carry", "place"]
 # constant share held them from 0.7 / only at 1.0. Checked on those two holds and on envelope
 # seeds 8080 and 9191, 200 scripts each (README).
 LEAN_RATIO_LOW = 1.0 / 3.0
+# Time step (s) of the search for a later lift-off that reaches a grasp (refusal advice).
+GRASP_REACH_STEP = 0.02
 LEAN_RATIO_HIGH = 2.0 / 3.0
 
 
 @dataclass(frozen=True, slots=True)
 class PlannedHold:
-    """One pose of a plan in which the hands bear `mass` kg of `object`: `kind` "carry" (at
-    the end of the pick `task_index`) or "place" (at the release of the drop `task_index`),
-    at `time` (s)."""
+    """One pose of a plan in which the hands bear `mass` kg of `object`: `kind` "grasp" (at
+    the lift-off of the pick `task_index`, mass 0), "carry" (at the end of the pick) or
+    "place" (at the release of the drop `task_index`), at `time` (s)."""
 
     object: str
     mass: float
@@ -111,12 +125,12 @@ def _segment_end(plan: Plan, hand: int, task: int, label: str) -> HandSegment | 
     return None
 
 
-def _in_trunk(plan: Plan, seg: HandSegment) -> Vec3:
-    """A segment's end point in the planned trunk frame at its end time."""
+def _in_trunk(plan: Plan, seg: HandSegment, t: float | None = None) -> Vec3:
+    """A segment's end point in the planned trunk frame at time t (default its end time)."""
     p = seg.end.point
     if seg.end.frame == "trunk":
         return p
-    x, y, yaw, *_ = plan.trunk.pose_at(seg.t1)
+    x, y, yaw, *_ = plan.trunk.pose_at(seg.t1 if t is None else t)
     c, s = math.cos(yaw), math.sin(yaw)
     dx, dy = p[0] - x, p[1] - y
     return (c * dx + s * dy, -s * dx + c * dy, p[2] - plan.trunk.height)
@@ -158,10 +172,22 @@ def _hold_poses(plan: Plan, hold: ObjectHold, model: StaticModel | None) -> list
     return out
 
 
+def _grasp_pose(plan: Plan, hold: ObjectHold) -> PlannedHold | None:
+    found = _pose(plan, hold, hold.pick_task, "grip")
+    if found is None:
+        return None
+    pose, t = found
+    return PlannedHold(hold.object, 0.0, "grasp", hold.pick_task, t, pose)
+
+
 def planned_holds(plan: Plan, model: StaticModel | None = None) -> tuple[PlannedHold, ...]:
-    """The carry pose (with `model`, the worse of the pick's end and the settled pose; else
-    both) and the place pose of every hold of `plan`, in pick order."""
-    return tuple(p for hold in plan.holds for p in _hold_poses(plan, hold, model))
+    """The grasp pose, the carry pose (with `model`, the worse of the pick's end and the
+    settled pose; else both) and the place pose of every hold of `plan`, in pick order."""
+    out: list[PlannedHold] = []
+    for hold in plan.holds:
+        grasp = _grasp_pose(plan, hold)
+        out.extend(([grasp] if grasp is not None else []) + _hold_poses(plan, hold, model))
+    return tuple(out)
 
 
 def lean_weight(ratio: float) -> float:
@@ -208,6 +234,75 @@ def payload_margins(plan: Plan, robot: str) -> tuple[PayloadMargin, ...]:
     )
 
 
+def grasp_reach_limit() -> float:
+    """How far (m) a grip point may lie beyond the arms' reach (module docstring)."""
+    return k.GRASP_TOLERANCE + k.GRASP_SQUEEZE
+
+
+def check_grasp_reach(plan: Plan, robot: str) -> None:
+    """Raise an `infeasible (reach)` PlanError, located at the pick, for the first pick of
+    `plan` whose grip points the robot `robot` cannot reach from the planned trunk pose at
+    the lift-off (module docstring), saying when a later start of the pick would reach them
+    or else how far out of reach they are."""
+    if not plan.holds:
+        return
+    model = _model(robot)
+    for hold in plan.holds:
+        grasp = _grasp_pose(plan, hold)
+        if grasp is None:
+            continue
+        residual = _grip_residual(model, grasp.pose)
+        if residual <= grasp_reach_limit():
+            continue
+        task = plan.tasks[hold.pick_task]
+        later = _reachable_after(plan, hold, model)
+        ahead = max(math.hypot(p[0], p[1]) for p in grasp.pose.p_hands_trunk)
+        what = (
+            f"infeasible (reach): at the lift-off of '{hold.object}' ({grasp.time:.2f} s) its "
+            f"grip points are {residual:.3f} m beyond the arms' reach from the planned trunk "
+            f"pose (up to {ahead:.2f} m from the trunk's axis; allowed "
+            f"{grasp_reach_limit():.2f} m: the hands close within {k.GRASP_TOLERANCE:.2f} m "
+            "of its sides)"
+        )
+        if later is not None:
+            advice = (
+                f"start the pick at {task.start + later:.2f} s or later (the trunk then "
+                "faces the object), or place the object nearer the robot"
+            )
+        else:
+            advice = "place the object nearer the robot or walk up to it first"
+        raise InfeasiblePlanError(
+            f"{what}; {advice}", hold.pick_task, loc=("tasks", hold.pick_task)
+        )
+
+
+def _grip_residual(model: StaticModel, pose: HeldPose) -> float:
+    """The largest distance (m) by which the arms miss the pose's hand points."""
+    _, residual, _ = model.postures.arms(pose)
+    return max(residual)
+
+
+def _reachable_after(plan: Plan, hold: ObjectHold, model: StaticModel) -> float | None:
+    """The least delay (s, on a GRASP_REACH_STEP grid) of a pick's lift-off after which the
+    planned trunk pose reaches its (world-fixed) grip points, up to the plan's end; None if
+    none does. An estimate for the refusal's advice: a later pick is planned afresh."""
+    from locoplan.plan.statics import HeldPose
+
+    hands = tuple(HAND_NAMES.index(h) for h in hold.hands)
+    segments = [_segment_end(plan, h, hold.pick_task, "grip") for h in hands]
+    grips = [seg for seg in segments if seg is not None]
+    if len(grips) != len(hands):
+        return None
+    t0 = max(seg.t1 for seg in grips)
+    steps = int((plan.t_end - t0) / GRASP_REACH_STEP)
+    for j in range(1, steps + 1):
+        t = t0 + j * GRASP_REACH_STEP
+        pose = HeldPose(plan.trunk.height, hands, tuple(_in_trunk(plan, g, t) for g in grips))
+        if _grip_residual(model, pose) <= grasp_reach_limit():
+            return math.ceil(j * GRASP_REACH_STEP * 100.0 - 1e-9) / 100.0
+    return None
+
+
 def check_payload(plan: Plan, robot: str) -> None:
     """Raise an `infeasible (payload)` / `infeasible (balance)` PlanError, located at the
     task, for the first carry or place pose of `plan` that the robot `robot` cannot hold
@@ -216,6 +311,8 @@ def check_payload(plan: Plan, robot: str) -> None:
         return
     model = _model(robot)
     for held in planned_holds(plan, model):
+        if held.kind == "grasp":
+            continue
         if model.ratio_at_centre(held.pose, held.mass) <= 1.0:
             continue
         analysis = model.analyse(held.pose, held.mass)

@@ -44,12 +44,12 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
+from locoplan.plan.constants import GRASP_TOLERANCE
 from locoplan.plan.manipulation import ObjectHold
 from locoplan.sim.scene import Scene
 
 FloatArray = npt.NDArray[np.float64]
 
-GRASP_TOLERANCE = 0.03  # m between the hand point and the object's surface
 GRASP_EARLY = 0.05  # s before the planned grasp instant the hands may close
 GRASP_WINDOW = 0.25  # s after the planned lift-off the grasp may still close
 BELT_GAIN = 20.0  # 1/s: how fast the belt's friction brings an object to belt speed
