@@ -148,7 +148,8 @@ EARLY_TURNING_PICK = """version: 1
 name: early-turning-pick
 gait: {period: 0.37, swing: 0.18}
 objects:
-  parcel: {shape: box, size: [0.144, 0.224, 0.196], mass: 1.02, position: [-0.286, 0.2, 0.644], yaw: 145.1}
+  parcel: {shape: box, size: [0.144, 0.224, 0.196], mass: 1.02,
+           position: [-0.286, 0.2, 0.644], yaw: 145.1}
 fixtures:
   table: {kind: table, position: [-0.417, 0.291, 0.0], size: [0.402, 0.576, 0.546], yaw: 145.1}
   platform: {kind: platform, position: [0.381, 0.1, 0.0], size: [0.316, 0.323, 0.475], yaw: 14.7}

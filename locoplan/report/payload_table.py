@@ -10,9 +10,10 @@ from locoplan.plan.payload import PayloadMargin
 
 
 def payload_table(margins: tuple[PayloadMargin, ...]) -> Table:
-    """One row per grasp (its reach margin only), carry or place pose (`locoplan.plan.payload.payload_margins`): the mass,
-    reach margin, worst static torque ratio and its joint, centre-of-mass margin, the pelvis
-    shift the analysis used and the payload limit of the pose."""
+    """One row per grasp pose (its reach margin only), carry or place pose
+    (`locoplan.plan.payload.payload_margins`): the mass, reach margin, worst static torque
+    ratio and its joint, centre-of-mass margin, the pelvis shift the analysis used and the
+    payload limit of the pose."""
     table = Table(title="static payload margins", title_justify="left", show_header=False)
     table.add_column("pose")
     table.add_column("margins")
