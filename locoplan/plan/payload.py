@@ -68,9 +68,9 @@ PoseKind = Literal["grasp", "carry", "place"]
 # constant share held them from 0.7 / only at 1.0. Checked on those two holds and on envelope
 # seeds 8080 and 9191, 200 scripts each (README).
 LEAN_RATIO_LOW = 1.0 / 3.0
+LEAN_RATIO_HIGH = 2.0 / 3.0
 # Time step (s) of the search for a later lift-off that reaches a grasp (refusal advice).
 GRASP_REACH_STEP = 0.02
-LEAN_RATIO_HIGH = 2.0 / 3.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -136,14 +136,18 @@ def _in_trunk(plan: Plan, seg: HandSegment, t: float | None = None) -> Vec3:
     return (c * dx + s * dy, -s * dx + c * dy, p[2] - plan.trunk.height)
 
 
-def _pose(plan: Plan, hold: ObjectHold, task: int, label: str) -> tuple[HeldPose, float] | None:
+def _pose(
+    plan: Plan, hold: ObjectHold, task: int, label: str, at: float | None = None
+) -> tuple[HeldPose, float] | None:
+    """The hands' points at the end of the segments `label` of `task` in the planned trunk
+    frame at time `at` (default each segment's end), and the latest of those ends (s)."""
     from locoplan.plan.statics import HeldPose
 
     hands = tuple(HAND_NAMES.index(h) for h in hold.hands)
     segments = [_segment_end(plan, h, task, label) for h in hands]
     if any(seg is None for seg in segments):
         return None
-    points = tuple(_in_trunk(plan, seg) for seg in segments if seg is not None)
+    points = tuple(_in_trunk(plan, seg, at) for seg in segments if seg is not None)
     t = max(seg.t1 for seg in segments if seg is not None)
     return HeldPose(plan.trunk.height, hands, points), t
 
@@ -286,19 +290,14 @@ def _reachable_after(plan: Plan, hold: ObjectHold, model: StaticModel) -> float 
     """The least delay (s, on a GRASP_REACH_STEP grid) of a pick's lift-off after which the
     planned trunk pose reaches its (world-fixed) grip points, up to the plan's end; None if
     none does. An estimate for the refusal's advice: a later pick is planned afresh."""
-    from locoplan.plan.statics import HeldPose
-
-    hands = tuple(HAND_NAMES.index(h) for h in hold.hands)
-    segments = [_segment_end(plan, h, hold.pick_task, "grip") for h in hands]
-    grips = [seg for seg in segments if seg is not None]
-    if len(grips) != len(hands):
+    found = _pose(plan, hold, hold.pick_task, "grip")
+    if found is None:
         return None
-    t0 = max(seg.t1 for seg in grips)
+    t0 = found[1]
     steps = int((plan.t_end - t0) / GRASP_REACH_STEP)
     for j in range(1, steps + 1):
-        t = t0 + j * GRASP_REACH_STEP
-        pose = HeldPose(plan.trunk.height, hands, tuple(_in_trunk(plan, g, t) for g in grips))
-        if _grip_residual(model, pose) <= grasp_reach_limit():
+        later = _pose(plan, hold, hold.pick_task, "grip", at=t0 + j * GRASP_REACH_STEP)
+        if later is not None and _grip_residual(model, later[0]) <= grasp_reach_limit():
             return math.ceil(j * GRASP_REACH_STEP * 100.0 - 1e-9) / 100.0
     return None
 
