@@ -60,7 +60,10 @@ PICK_CARRIED: Final = PickPhases(0.35, 0.45, 0.50, 0.85, 0.06)
 # first back along the object's sides (DROP_BACK_SHARE of that time) when a straight retreat
 # would pass too close to it. The retreat gets a third of the drop: about 0.2 m, which in a 1 s
 # drop keeps the hands below 1.2 m/s (faster retreats shook the robot off balance after the
-# release).
+# release). HOVER_END and RELEASE are where those phases end when the lowering has room; one
+# that would accelerate its load faster than `hand_paths.pull_accel` allows takes its time
+# from the hover and then from after RELEASE, up to the drop's end
+# (`manipulation._Builder._drop_times`).
 DROP_HOVER_END: Final = 0.45
 DROP_RELEASE: Final = 0.60
 DROP_OPEN_END: Final = 0.68
