@@ -55,9 +55,9 @@ def test_yaw_figure_has_both_runs_marks_and_annotation(package_traces: PackageTr
         assert {run, f"{run} plan", f"{run} pick start", f"{run} drop start"} <= labels
     texts = [t.get_text() for ax in fig.axes for t in ax.texts]
     # The plan turns 90 deg between the quasi-static pick and drop starts; the dynamic plan
-    # about 21 deg (scenario description). Annotations carry one decimal.
+    # about 17 deg (scenario description). Annotations carry one decimal.
     assert "Δyaw 90.0°" in texts
-    assert any(t.startswith("Δyaw 2") for t in texts)
+    assert any(t.startswith("Δyaw 1") for t in texts)
     assert "quasi-static 90.0°" in fig.axes[0].get_title()
 
 

@@ -35,19 +35,21 @@ def test_walk_faster_than_the_legs_step_is_refused_with_the_duration_it_needs(
     text = HEAD + "tasks:\n  - {action: walk, distance: [100, 0], start: 0, duration: 2}\n"
     [msg] = _issues(text, tmp_path)
     assert msg.startswith("5:")
-    assert "infeasible (rate): walk of 100 m in 2 s is 50 m/s" in msg
-    # 0.18 m half stride per 0.4 s period: 0.45 m/s, so 100 m needs 222 s
+    # The cruise profile peaks at 1.5x the 50 m/s average.
+    assert "infeasible (rate): walk of 100 m in 2 s peaks at 75 m/s" in msg
+    # 0.18 m half stride per 0.4 s period: 0.45 m/s at the peak, so 100 m needs 1.5 x 222 s
+    # (rounded up to 0.01 s)
     assert "at most 0.45 m/s" in msg
-    assert "at least 222.22 s" in msg
+    assert "at least 333.34 s" in msg
 
 
 def test_turn_quicker_than_the_hip_yaw_range_allows_is_refused(tmp_path: Path) -> None:
     text = HEAD + "tasks:\n  - {action: turn, angle: 180, start: 0, duration: 0.5}\n"
     [msg] = _issues(text, tmp_path)
-    assert "infeasible (rate): turn by 180 deg in 0.5 s is 360 deg/s" in msg
-    # 2 x 30 deg per 0.4 s period = 150 deg/s
+    assert "infeasible (rate): turn by 180 deg in 0.5 s peaks at 540 deg/s" in msg
+    # 2 x 30 deg per 0.4 s period = 150 deg/s at the peak: 1.5 x 180 / 150 = 1.8 s
     assert "at most 150 deg/s" in msg
-    assert "at least 1.20 s" in msg
+    assert "at least 1.80 s" in msg
 
 
 def test_object_inside_the_robot_is_refused(tmp_path: Path) -> None:

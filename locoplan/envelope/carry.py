@@ -19,9 +19,11 @@ from locoplan.envelope.compose import (
     rt,
     table_with_object,
     target,
+    turn_limit_deg,
     wrap_deg,
 )
 from locoplan.envelope.geometry import layout_ok
+from locoplan.scenario.feasibility import walk_speed_limit
 
 GEOMETRY_TRIES = 20
 # m: side-carry keeps the table and the platform this far apart across the step, plus the
@@ -48,12 +50,12 @@ def walk_carry(d: Draw, name: str) -> Doc:
     walk = pick_end
     if abs(turn) >= 0.05:
         turn_start = rt(pick_end - d.time(*rg.WALK_CARRY_TURN_LEAD))
-        turn_d = d.duration(turn, rg.WALK_CARRY_TURN_RATE, period)
+        turn_d = d.duration(turn, rg.WALK_CARRY_TURN_RATE, period, turn_limit_deg(period))
         tasks.append({"action": "turn", "angle": turn, "start": turn_start, "duration": turn_d})
         walk = rt(turn_start + turn_d)
     walk = rt(walk + d.time(0.0, 0.3))
     distance = d.length(*rg.WALK_CARRY_DISTANCE)
-    walk_d = d.duration(distance, rg.WALK_CARRY_SPEED, period)
+    walk_d = d.duration(distance, rg.WALK_CARRY_SPEED, period, walk_speed_limit(period))
     walk_end = rt(walk + walk_d)
     tasks.append({"action": "walk", "distance": [distance, 0.0], "start": walk, "duration": walk_d})
     drop = max(pick_end, rt(walk_end - d.time(*rg.WALK_CARRY_DROP_LEAD)))
@@ -103,7 +105,7 @@ def side_carry(d: Draw, name: str) -> Doc:
     pick, pick_d = 0.5, d.time(*rg.PICK_DURATION)
     pick_end = rt(pick + pick_d)
     walk = rt(pick_end + d.time(0.0, 0.3))
-    walk_d = d.duration(side, rg.SIDE_SPEED, period)
+    walk_d = d.duration(side, rg.SIDE_SPEED, period, walk_speed_limit(period))
     drop = rt(walk + walk_d + d.time(0.0, 0.3))
     drop_d = d.time(*rg.DROP_DURATION)
     tasks: list[Doc] = [

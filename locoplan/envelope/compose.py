@@ -19,6 +19,8 @@ import numpy as np
 
 from locoplan.envelope import ranges as rg
 from locoplan.envelope.geometry import Rect
+from locoplan.plan.profiles import peak_rate
+from locoplan.scenario.feasibility import turn_rate_limit
 
 Doc = dict[str, Any]
 
@@ -30,6 +32,19 @@ class NoLayout(Exception):
 def rt(x: float) -> float:
     """A time on the 0.01 s grid."""
     return round(x + 0.0, 2)
+
+
+def within_gait(duration: float, amount: float, gait_limit: float, period: float) -> float:
+    """`duration` (s) lengthened by 0.01 s steps until the planned peak rate of `amount` is
+    within `gait_limit`."""
+    while peak_rate(amount, duration, period) > gait_limit + 1e-9:
+        duration = rt(duration + 0.01)
+    return duration
+
+
+def turn_limit_deg(period: float) -> float:
+    """The feasibility check's turn rate limit (deg/s) at a gait `period`."""
+    return math.degrees(turn_rate_limit(period))
 
 
 def rl(x: float) -> float:
@@ -87,15 +102,17 @@ class Draw:
     def choice(self, options: Sequence[str]) -> str:
         return options[int(self.rng.integers(len(options)))]
 
-    def duration(self, amount: float, max_rate: float, least: float) -> float:
+    def duration(self, amount: float, max_rate: float, period: float, gait_limit: float) -> float:
         """How long a task covering `amount` (deg or m) takes: `amount` over a rate drawn
-        from [RATE_FLOOR x max_rate, max_rate], rounded up to 0.01 s, at least `least`."""
+        from [RATE_FLOOR x max_rate, max_rate], rounded up to 0.01 s, at least one gait
+        `period`, and long enough that its planned peak rate (the trunk's cruise profile) is
+        within `gait_limit` (the feasibility check's, same unit per s)."""
         rate = float(self.rng.uniform(rg.RATE_FLOOR * max_rate, max_rate))
-        d = max(abs(amount) / rate, least)
+        d = max(abs(amount) / rate, period)
         d = math.ceil(d * 100.0 - 1e-6) / 100.0
         while abs(amount) / d > max_rate + 1e-9:
             d = rt(d + 0.01)
-        return rt(d)
+        return within_gait(d, amount, gait_limit, period)
 
     def manip_gait(self) -> dict[str, float]:
         """Gait of the manipulation families (MANIP_PERIOD, MANIP_SWING, swing <= P/2)."""

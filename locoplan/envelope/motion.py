@@ -20,8 +20,11 @@ from locoplan.envelope.compose import (
     rl,
     rt,
     table_with_object,
+    turn_limit_deg,
+    within_gait,
 )
 from locoplan.envelope.geometry import layout_ok
+from locoplan.scenario.feasibility import walk_speed_limit
 
 # Odds of each locomotion task kind.
 LOCO_KINDS = (("walk", 0.45), ("turn", 0.35), ("step", 0.20))
@@ -35,11 +38,12 @@ def _loco_task(d: Draw, kind: str, period: float) -> Doc:
         length = math.hypot(dx, dy)
         task: Doc = {"action": "walk", "distance": [dx, dy]}
         angle = d.sign() * d.angle(*rg.LOCO_WALK_ANGLE) if d.chance(0.5) else 0.0
-        duration = d.duration(length, rg.LOCO_WALK_SPEED, period)
+        duration = d.duration(length, rg.LOCO_WALK_SPEED, period, walk_speed_limit(period))
         if angle:
             task["angle"] = angle
             while abs(angle) / duration > rg.LOCO_TURN_RATE:
                 duration = rt(duration + 0.01)
+            duration = within_gait(duration, angle, turn_limit_deg(period), period)
         task["duration"] = duration
         return task
     if kind == "turn":
@@ -47,7 +51,7 @@ def _loco_task(d: Draw, kind: str, period: float) -> Doc:
         return {
             "action": "turn",
             "angle": angle,
-            "duration": d.duration(angle, rg.LOCO_TURN_RATE, period),
+            "duration": d.duration(angle, rg.LOCO_TURN_RATE, period, turn_limit_deg(period)),
         }
     return {"action": "step", "duration": d.time(rg.LOCO_STEP[0], rg.LOCO_STEP[1])}
 

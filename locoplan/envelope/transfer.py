@@ -18,6 +18,7 @@ from locoplan.envelope.compose import (
     rt,
     table_with_object,
     target,
+    turn_limit_deg,
     wrap_deg,
 )
 from locoplan.envelope.geometry import layout_ok
@@ -32,13 +33,13 @@ def transfer(d: Draw, name: str) -> Doc:
     sign = d.sign()
     turn1 = sign * d.angle(*rg.TRANSFER_TURN1)
     turn2 = -sign * d.angle(*rg.TRANSFER_TURN2)
-    t1, d1 = 0.0, d.duration(turn1, rg.TRANSFER_TURN_RATE, period)
+    t1, d1 = 0.0, d.duration(turn1, rg.TRANSFER_TURN_RATE, period, turn_limit_deg(period))
     t1_end = rt(t1 + d1)
     pick = d.time(t1 + d1 / 2, t1_end)
     pick_d = d.time(*rg.PICK_DURATION)
     pick_end = rt(pick + pick_d)
     t2 = max(t1_end, pick_end)
-    d2 = d.duration(turn2, rg.TRANSFER_TURN_RATE, period)
+    d2 = d.duration(turn2, rg.TRANSFER_TURN_RATE, period, turn_limit_deg(period))
     t2_end = rt(t2 + d2)
     drop = d.time(t2 + d2 / 2, t2_end)
     drop_d = d.time(*rg.DROP_DURATION)

@@ -8,6 +8,12 @@ p(tau) = (1 - s) p0 + s p1 + T (g0 v0 + g1 v1), where s is the min-jerk blend,
 g0 = tau - 6 tau^3 + 8 tau^4 - 3 tau^5 (unit start slope, zero end slope) and
 g1 = -4 tau^3 + 7 tau^4 - 3 tau^5 (zero start slope, unit end slope); T is the segment
 duration and v0, v1 the end velocities. With v0 = v1 = 0 it is the min-jerk blend.
+
+`cruise`: rest to rest with a constant-velocity middle. The velocity rises along the cubic
+smoothstep 3u^2 - 2u^3 over the first fraction r of the time, holds 1 / (1 - r) and falls back
+symmetrically over the last r, so s' peaks at 1 / (1 - r) (the min-jerk blend: 1.875) and
+|s''| at 1.5 / (r (1 - r)) (min-jerk: 5.77); s'' is continuous and zero at both ends. s(1) is
+1.0 exactly (the end is evaluated as 1 - ramp(0)).
 """
 
 from __future__ import annotations
@@ -55,3 +61,72 @@ def hermite(tau: float) -> tuple[float, float, float, float, float, float]:
     g1 = -4.0 * p3 + 7.0 * p3 * p - 3.0 * p3 * p2
     dg1 = -12.0 * p2 + 28.0 * p3 - 15.0 * p2 * p2
     return s, ds, g0, dg0, g1, dg1
+
+
+# Largest ramp fraction `cruise` is used with: at 1/2 there is no cruise left and the peak s'
+# (2) exceeds the min-jerk blend's; at 1/3 the peak s' is 1.5 and the peak s'' 1.17x min-jerk's.
+CRUISE_MAX_RAMP = 1.0 / 3.0
+
+
+def ramp_fraction(duration: float, period: float) -> float:
+    """Ramp fraction of a walk or turn of `duration` s under a gait of `period` s:
+    CRUISE_MAX_RAMP whatever the two (the arguments keep the callers' rule in one place).
+
+    Ramps of one gait period (the time the footholds take to follow a change of speed) were
+    tried first: they cut the peak of long walks to T / (T - period) of the average but raise
+    the peak acceleration to 1.5 v / period, 0.97 m/s^2 for the 0.5 m walk of issue 12's
+    6 kg walk-carry example (min-jerk: 0.53), which then fell at the walk's start with the
+    stance hip pitch and roll at their limits. A third of the duration keeps the peak
+    acceleration within 1.17x min-jerk's on every task."""
+    del duration, period
+    return CRUISE_MAX_RAMP
+
+
+def peak_rate(amount: float, duration: float, period: float) -> float:
+    """Peak rate (amount / s) of a walk or turn covering `amount` in `duration` s along the
+    cruise blend of `ramp_fraction`: the average times 1 / (1 - ramp)."""
+    return abs(amount) / duration / (1.0 - ramp_fraction(duration, period))
+
+
+def least_duration(amount: float, max_rate: float, period: float) -> float:
+    """Shortest duration (s) whose `peak_rate` is within `max_rate` > 0."""
+    del period
+    return abs(amount) / max_rate / (1.0 - CRUISE_MAX_RAMP)
+
+
+def cruise(tau: float, ramp: float) -> tuple[float, float, float]:
+    """Cruise blend s(tau) and ds/dtau, d2s/dtau2 for ramp fraction `ramp` in (0,
+    CRUISE_MAX_RAMP] (tau clipped to [0, 1]); see the module docstring."""
+    p = 0.0 if tau < 0.0 else (1.0 if tau > 1.0 else tau)
+    vp = 1.0 / (1.0 - ramp)
+    if p <= ramp:
+        u = p / ramp
+        return (
+            vp * ramp * u * u * u * (1.0 - 0.5 * u),
+            vp * u * u * (3.0 - 2.0 * u),
+            6.0 * vp * u * (1.0 - u) / ramp,
+        )
+    if p < 1.0 - ramp:
+        return vp * (p - 0.5 * ramp), vp, 0.0
+    u = (1.0 - p) / ramp
+    return (
+        1.0 - vp * ramp * u * u * u * (1.0 - 0.5 * u),
+        vp * u * u * (3.0 - 2.0 * u),
+        -6.0 * vp * u * (1.0 - u) / ramp,
+    )
+
+
+def cruise_array(tau: FloatArray, ramp: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Vectorised `cruise`: tau and ramp arrays of one shape (ramp > 0 elementwise)."""
+    p = np.clip(tau, 0.0, 1.0)
+    vp = 1.0 / (1.0 - ramp)
+    rise = p <= ramp
+    fall = p >= 1.0 - ramp
+    u = np.where(rise, p / ramp, np.where(fall, (1.0 - p) / ramp, 0.0))
+    edge_s = vp * ramp * u * u * u * (1.0 - 0.5 * u)
+    edge_ds = vp * u * u * (3.0 - 2.0 * u)
+    edge_dds = 6.0 * vp * u * (1.0 - u) / ramp
+    s = np.where(rise, edge_s, np.where(fall, 1.0 - edge_s, vp * (p - 0.5 * ramp)))
+    ds = np.where(rise | fall, edge_ds, vp)
+    dds = np.where(rise, edge_dds, np.where(fall, -edge_dds, 0.0))
+    return s, ds, dds
