@@ -89,3 +89,31 @@ def test_base_height_and_bad_arguments() -> None:
         compile_plan(scenario, base_height=0.0)
     with pytest.raises(ValueError, match="foot_width"):
         compile_plan(scenario, foot_width=-0.1)
+
+
+def test_walks_and_turns_peak_at_one_and_a_half_times_their_average() -> None:
+    """The cruise profile: the speed ramps over the first and last thirds, so the peak is
+    1.5 x distance / duration, and the peak acceleration 1.5 x peak / (duration / 3) =
+    6.75 x distance / duration^2 (min-jerk: 1.875 and 5.77). Sampled every 0.1 ms: the
+    plateau is sampled exactly, the acceleration peak (mid-ramp) to 1e-6 relative."""
+    plan = compile_plan(scenario_from_text(TURN_WALK))
+    walk, turn = plan.tasks[1], plan.tasks[0]
+    for task, amount, pick in (
+        (
+            walk,
+            math.hypot(0.4, 0.1),
+            lambda r: (
+                np.linalg.norm(r.velocity[:, :2], axis=1),
+                np.linalg.norm(r.acceleration[:, :2], axis=1),
+            ),
+        ),
+        (turn, math.radians(90.0), lambda r: (np.abs(r.yaw_rate), np.abs(r.yaw_acceleration))),
+    ):
+        duration = task.end - task.start
+        ref = plan.trunk_reference(np.linspace(task.start, task.end, int(duration * 1e4) + 1))
+        speed, accel = pick(ref)
+        assert speed.max() == pytest.approx(1.5 * amount / duration, rel=1e-12)
+        assert accel.max() == pytest.approx(6.75 * amount / duration**2, rel=1e-6)
+        # The plateau: the middle third moves at the peak speed.
+        mid = (ref.yaw_rate if task is turn else speed)[speed.size // 3 + 1 : 2 * speed.size // 3]
+        assert np.allclose(np.abs(mid), 1.5 * amount / duration, rtol=1e-12)
