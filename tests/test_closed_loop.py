@@ -91,8 +91,8 @@ def test_survives_lateral_push_while_stepping(tmp_path: Path, direction: float) 
 def test_walks_forward_one_metre(tmp_path: Path) -> None:
     text = (
         "version: 1\nname: walk-forward\n"
-        "tasks:\n  - {action: walk, distance: [1.0, 0.0], start: 0.3, duration: 3.2}\n"
-        "end: 4.3\n"
+        "tasks:\n  - {action: walk, distance: [1.0, 0.0], start: 0.3, duration: 3.4}\n"
+        "end: 4.5\n"
     )
     result = _run(tmp_path, text)
     _, pos, yaw = _trajectory(result)
