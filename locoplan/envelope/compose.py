@@ -34,10 +34,10 @@ def rt(x: float) -> float:
     return round(x + 0.0, 2)
 
 
-def within_gait(duration: float, amount: float, gait_limit: float, period: float) -> float:
+def within_gait(duration: float, amount: float, gait_limit: float) -> float:
     """`duration` (s) lengthened by 0.01 s steps until the planned peak rate of `amount` is
     within `gait_limit`."""
-    while peak_rate(amount, duration, period) > gait_limit + 1e-9:
+    while peak_rate(amount, duration) > gait_limit + 1e-9:
         duration = rt(duration + 0.01)
     return duration
 
@@ -112,7 +112,7 @@ class Draw:
         d = math.ceil(d * 100.0 - 1e-6) / 100.0
         while abs(amount) / d > max_rate + 1e-9:
             d = rt(d + 0.01)
-        return within_gait(d, amount, gait_limit, period)
+        return within_gait(d, amount, gait_limit)
 
     def manip_gait(self) -> dict[str, float]:
         """Gait of the manipulation families (MANIP_PERIOD, MANIP_SWING, swing <= P/2)."""

@@ -43,7 +43,7 @@ def _loco_task(d: Draw, kind: str, period: float) -> Doc:
             task["angle"] = angle
             while abs(angle) / duration > rg.LOCO_TURN_RATE:
                 duration = rt(duration + 0.01)
-            duration = within_gait(duration, angle, turn_limit_deg(period), period)
+            duration = within_gait(duration, angle, turn_limit_deg(period))
         task["duration"] = duration
         return task
     if kind == "turn":

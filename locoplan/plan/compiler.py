@@ -61,12 +61,7 @@ def compile_plan(
     contacts = build_contact_schedule(tasks, scenario.gait.period, scenario.gait.swing)
     start = scenario.robot_start
     trunk = build_trunk_path(
-        tasks,
-        start.position[0],
-        start.position[1],
-        math.radians(start.yaw),
-        base_height,
-        scenario.gait.period,
+        tasks, start.position[0], start.position[1], math.radians(start.yaw), base_height
     )
     footholds = build_footholds(contacts, trunk, foot_width)
     swings = tuple(iv for f in range(2) for iv in contacts.swing_intervals(f))

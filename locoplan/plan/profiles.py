@@ -63,41 +63,34 @@ def hermite(tau: float) -> tuple[float, float, float, float, float, float]:
     return s, ds, g0, dg0, g1, dg1
 
 
-# Largest ramp fraction `cruise` is used with: at 1/2 there is no cruise left and the peak s'
-# (2) exceeds the min-jerk blend's; at 1/3 the peak s' is 1.5 and the peak s'' 1.17x min-jerk's.
-CRUISE_MAX_RAMP = 1.0 / 3.0
+# Ramp fraction of `cruise`: the velocity rises over the first CRUISE_RAMP of a walk or turn
+# and falls over the last. At 1/2 there is no cruise left and the peak s' (2) exceeds the
+# min-jerk blend's; at 1/3 the peak s' is 1.5 and the peak s'' 1.17x min-jerk's. Ramps of one
+# gait period (the time the footholds take to follow a change of speed) were tried first: they
+# cut the peak of long walks to T / (T - period) of the average but raised the peak
+# acceleration to 1.5 v / period, 0.97 m/s^2 for the 0.5 m walk of issue 12's 6 kg walk-carry
+# example (min-jerk: 0.53), which then fell at the walk's start with the stance hip pitch and
+# roll at their limits. A third of the duration keeps the peak acceleration within 1.17x
+# min-jerk's on every task.
+CRUISE_RAMP = 1.0 / 3.0
 
 
-def ramp_fraction(duration: float, period: float) -> float:
-    """Ramp fraction of a walk or turn of `duration` s under a gait of `period` s:
-    CRUISE_MAX_RAMP whatever the two (the arguments keep the callers' rule in one place).
-
-    Ramps of one gait period (the time the footholds take to follow a change of speed) were
-    tried first: they cut the peak of long walks to T / (T - period) of the average but raise
-    the peak acceleration to 1.5 v / period, 0.97 m/s^2 for the 0.5 m walk of issue 12's
-    6 kg walk-carry example (min-jerk: 0.53), which then fell at the walk's start with the
-    stance hip pitch and roll at their limits. A third of the duration keeps the peak
-    acceleration within 1.17x min-jerk's on every task."""
-    del duration, period
-    return CRUISE_MAX_RAMP
-
-
-def peak_rate(amount: float, duration: float, period: float) -> float:
+def peak_rate(amount: float, duration: float) -> float:
     """Peak rate (amount / s) of a walk or turn covering `amount` in `duration` s along the
-    cruise blend of `ramp_fraction`: the average times 1 / (1 - ramp)."""
-    return abs(amount) / duration / (1.0 - ramp_fraction(duration, period))
+    cruise blend: the average times 1 / (1 - CRUISE_RAMP)."""
+    return abs(amount) / duration / (1.0 - CRUISE_RAMP)
 
 
-def least_duration(amount: float, max_rate: float, period: float) -> float:
+def least_duration(amount: float, max_rate: float) -> float:
     """Shortest duration (s) whose `peak_rate` is within `max_rate` > 0."""
-    del period
-    return abs(amount) / max_rate / (1.0 - CRUISE_MAX_RAMP)
+    return abs(amount) / max_rate / (1.0 - CRUISE_RAMP)
 
 
-def cruise(tau: float, ramp: float) -> tuple[float, float, float]:
-    """Cruise blend s(tau) and ds/dtau, d2s/dtau2 for ramp fraction `ramp` in (0,
-    CRUISE_MAX_RAMP] (tau clipped to [0, 1]); see the module docstring."""
+def cruise(tau: float) -> tuple[float, float, float]:
+    """Cruise blend s(tau) and ds/dtau, d2s/dtau2 with ramps of CRUISE_RAMP (tau clipped to
+    [0, 1]); see the module docstring."""
     p = 0.0 if tau < 0.0 else (1.0 if tau > 1.0 else tau)
+    ramp = CRUISE_RAMP
     vp = 1.0 / (1.0 - ramp)
     if p <= ramp:
         u = p / ramp
@@ -116,9 +109,10 @@ def cruise(tau: float, ramp: float) -> tuple[float, float, float]:
     )
 
 
-def cruise_array(tau: FloatArray, ramp: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Vectorised `cruise`: tau and ramp arrays of one shape (ramp > 0 elementwise)."""
+def cruise_array(tau: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Vectorised `cruise`: arrays of s, ds/dtau, d2s/dtau2 with the shape of `tau`."""
     p = np.clip(tau, 0.0, 1.0)
+    ramp = CRUISE_RAMP
     vp = 1.0 / (1.0 - ramp)
     rise = p <= ramp
     fall = p >= 1.0 - ramp

@@ -11,7 +11,7 @@ yaw rate a stance foot can follow, and min-jerk peaks at 1.875x the task's avera
 m reach ahead of the hip) and a 90 deg/s turn 169 deg/s; the robot fell behind its reference
 and fell (envelope seed 6161: locomotion-038 lagged 0.2 m before it fell). The cruise profile
 ramps the velocity up over the first third of the task, holds it and ramps it down over the
-last third (profiles.ramp_fraction says why a third): the peak is 1.5x the average and the peak
+last third (profiles.CRUISE_RAMP says why a third): the peak is 1.5x the average and the peak
 acceleration 1.17x min-jerk's.
 Steps and non-locomotion tasks leave the pose where it is. The height is constant.
 Locomotion tasks never overlap, so the segments simply compose end to end.
@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from locoplan.plan.profiles import CRUISE_MAX_RAMP, cruise, cruise_array, ramp_fraction
+from locoplan.plan.profiles import cruise, cruise_array
 from locoplan.plan.tasks import PlannedTask
 
 FloatArray = npt.NDArray[np.float64]
@@ -63,7 +63,7 @@ class TrunkState:
 @dataclass(frozen=True, slots=True)
 class TrunkSegment:
     """One walk/turn: from (x0, y0, yaw0) at t0 to (x0 + dx, y0 + dy, yaw0 + dyaw) at t1,
-    along the cruise blend with ramp fraction `ramp`."""
+    along the cruise blend."""
 
     task_index: int
     t0: float
@@ -74,7 +74,6 @@ class TrunkSegment:
     dx: float
     dy: float
     dyaw: float
-    ramp: float
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -93,7 +92,6 @@ class TrunkPath:
     _dp: FloatArray
     _yaw0: FloatArray
     _dyaw: FloatArray
-    _ramp: FloatArray
     _t0_list: list[float]
 
     def evaluate(self, times: npt.ArrayLike) -> TrunkReference:
@@ -102,7 +100,7 @@ class TrunkPath:
         i = np.searchsorted(self._t0, t, side="right") - 1
         dur = self._dur[i]
         tau = (t - self._t0[i]) / dur
-        s, ds, dds = cruise_array(tau, self._ramp[i])
+        s, ds, dds = cruise_array(tau)
         n = t.shape[0]
         dp = self._dp[i]
         pos = np.empty((n, 3))
@@ -129,7 +127,7 @@ class TrunkPath:
             return self.x_start, self.y_start, self.yaw_start, 0.0, 0.0, 0.0
         g = self.segments[k]
         dur = g.t1 - g.t0
-        s, ds, _ = cruise((t - g.t0) / dur, g.ramp)
+        s, ds, _ = cruise((t - g.t0) / dur)
         r = ds / dur
         return (
             g.x0 + s * g.dx,
@@ -159,28 +157,21 @@ def build_trunk_path(
     y0: float,
     yaw0: float,
     height: float,
-    period: float,
 ) -> TrunkPath:
-    """Trunk path from the (sorted, non-overlapping) locomotion tasks, the initial pose and the
-    gait period (s), which sets the velocity ramps."""
+    """Trunk path from the (sorted, non-overlapping) locomotion tasks and the initial pose."""
     segments: list[TrunkSegment] = []
     x, y, yaw = x0, y0, yaw0
     for task in tasks:
-        ramp = ramp_fraction(task.end - task.start, period)
         if task.action == "walk" and task.distance is not None:
             c, s = math.cos(yaw), math.sin(yaw)
             bx, by = task.distance
             dx, dy = c * bx - s * by, s * bx + c * by
             turn = task.angle or 0.0
-            segments.append(
-                TrunkSegment(task.index, task.start, task.end, x, y, yaw, dx, dy, turn, ramp)
-            )
+            segments.append(TrunkSegment(task.index, task.start, task.end, x, y, yaw, dx, dy, turn))
             x, y, yaw = x + dx, y + dy, yaw + turn
         elif task.action == "turn" and task.angle is not None:
             segments.append(
-                TrunkSegment(
-                    task.index, task.start, task.end, x, y, yaw, 0.0, 0.0, task.angle, ramp
-                )
+                TrunkSegment(task.index, task.start, task.end, x, y, yaw, 0.0, 0.0, task.angle)
             )
             yaw = yaw + task.angle
     # Sentinel row 0 holds the initial pose: t0 = -inf makes tau = +inf, clipped to 1, with a
@@ -191,7 +182,6 @@ def build_trunk_path(
     dp = np.array([[0.0, 0.0]] + [[g.dx, g.dy] for g in segments], dtype=float)
     yaw0s = np.array([yaw0] + [g.yaw0 for g in segments])
     dyaw = np.array([0.0] + [g.dyaw for g in segments])
-    ramps = np.array([CRUISE_MAX_RAMP] + [g.ramp for g in segments])
     return TrunkPath(
         height=height,
         x_start=x0,
@@ -204,6 +194,5 @@ def build_trunk_path(
         _dp=dp,
         _yaw0=yaw0s,
         _dyaw=dyaw,
-        _ramp=ramps,
         _t0_list=[g.t0 for g in segments],
     )

@@ -71,7 +71,7 @@ def _rate_issues(scenario: Scenario) -> list[LocatedIssue]:
     for i, task in enumerate(scenario.tasks):
         if isinstance(task, WalkTask):
             dist = math.hypot(task.distance[0], task.distance[1])
-            v = peak_rate(dist, task.duration, period)
+            v = peak_rate(dist, task.duration)
             if v > v_max + 1e-9:
                 issues.append(
                     LocatedIssue(
@@ -80,15 +80,15 @@ def _rate_issues(scenario: Scenario) -> list[LocatedIssue]:
                         f"at {v:.3g} m/s (1.5x the average: the speed ramps up and down); "
                         f"with a gait period of {period:g} s the legs step at most "
                         f"{v_max:.3g} m/s: give the walk at least "
-                        f"{_ceil(least_duration(dist, v_max, period)):.2f} s",
+                        f"{_ceil(least_duration(dist, v_max)):.2f} s",
                     )
                 )
         angle = task.angle if isinstance(task, TurnTask | WalkTask) else None
         if angle is not None:
             amount = math.radians(abs(angle))
-            rate = peak_rate(amount, task.duration, period)
+            rate = peak_rate(amount, task.duration)
             if rate > w_max + 1e-9:
-                need = _ceil(least_duration(amount, w_max, period))
+                need = _ceil(least_duration(amount, w_max))
                 issues.append(
                     LocatedIssue(
                         ("tasks", i, "duration"),
