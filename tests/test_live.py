@@ -216,6 +216,58 @@ def test_pace_needs_live(tmp_path: Path) -> None:
     assert res.returncode == 2 and "--pace applies with --live only" in res.stderr
 
 
+def test_wait_needs_live(tmp_path: Path) -> None:
+    (tmp_path / "stand.yaml").write_text(_stand("nolive", 1.0))
+    res = subprocess.run(
+        [*LOCOPLAN, "run", "stand.yaml", "--wait", "1"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert res.returncode == 2 and "--wait applies with --live only" in res.stderr
+
+
+def test_live_run_without_a_client_starts_after_wait(tmp_path: Path) -> None:
+    """Nobody connects: the run starts after --wait s and completes; the MCAP is whole."""
+    (tmp_path / "stand.yaml").write_text(_stand("alone", 0.5))
+    start = time.monotonic()
+    res = subprocess.run(
+        [*LOCOPLAN, "run", "stand.yaml", "--live", "--port", "0", "--wait", "1.5", "--pace", "0",
+         "--quiet", "--out", "runs"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    assert time.monotonic() - start > 1.5
+    assert "at most 1.5 s" in res.stderr
+    assert (tmp_path / "runs" / "alone.mcap").stat().st_size > 0
+
+
+def test_wait_for_subscriber_sees_a_subscription(tmp_path: Path) -> None:
+    """The writer's own wait: False after the timeout with no client; True once a client
+    subscribes to /tf, which exists before the first tick."""
+    from locoplan.log.writer import RunLogWriter
+
+    async def subscribe(port: int) -> None:
+        async with await websockets.connect(
+            f"ws://127.0.0.1:{port}", subprotocols=SUBPROTOCOLS
+        ) as ws:
+            while True:
+                op = json.loads(await asyncio.wait_for(ws.recv(), 5.0))
+                if op["op"] == "advertise":
+                    ids = [c["id"] for c in op["channels"] if c["topic"] == "/tf"]
+                    if ids:
+                        sub = {"op": "subscribe", "subscriptions": [{"id": 1, "channelId": ids[0]}]}
+                        await ws.send(json.dumps(sub))
+                        await asyncio.sleep(0.3)
+                        return
+
+    with RunLogWriter(tmp_path / "w.mcap", scenario_name="w", scenario_text="") as writer:
+        port = writer.serve(0)
+        t0 = time.monotonic()
+        assert not writer.wait_for_subscriber(0.3)
+        assert time.monotonic() - t0 >= 0.3
+        asyncio.run(subscribe(port))
+        assert writer.wait_for_subscriber(2.0)
+
+
 def test_pacer_keeps_pace_and_publishes() -> None:
     from locoplan.sim.live import Pacer
 

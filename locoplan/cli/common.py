@@ -112,6 +112,15 @@ LIVE_PACE = typer.Option(
     help="With --live: run at K times real time (default 1; 0: as fast as it goes).",
     show_default=False,
 )
+LIVE_WAIT = typer.Option(
+    None,
+    "--wait",
+    metavar="SECONDS",
+    min=0.0,
+    help="With --live: start each run when a client subscribes to a topic, or after "
+    "SECONDS without one (default 30; 0: start at once).",
+    show_default=False,
+)
 
 
 def _interrupted(exc: BaseException, message: str) -> NoReturn:

@@ -11,6 +11,7 @@ from locoplan.cli.common import (
     EXIT_RUN_BROKE,
     LIVE_PACE,
     LIVE_PORT,
+    LIVE_WAIT,
     MAX_SIM_TIME,
     _fail,
     _interrupted,
@@ -71,6 +72,7 @@ def compare_command(
     ),
     port: int = LIVE_PORT,
     pace: float | None = LIVE_PACE,
+    wait: float | None = LIVE_WAIT,
     max_sim_time: float = MAX_SIM_TIME,
 ) -> None:
     """Run a task script twice and compare: quasi-static vs dynamic, or Model 1 vs 2.
@@ -135,6 +137,8 @@ def compare_command(
         _fail(EXIT_BAD_INPUT, f"unknown --qp '{qp_backend}'; allowed: daqp, proxsuite, piqp")
     if pace is not None and not live:
         _fail(EXIT_BAD_INPUT, "--pace applies with --live only")
+    if wait is not None and not live:
+        _fail(EXIT_BAD_INPUT, "--wait applies with --live only")
     scenario, text = _load_with_text_or_exit(file, max_sim_time)
     assert isinstance(scenario, Scenario)
     kind: CompareKind = "models" if models else "strategies"
@@ -143,12 +147,13 @@ def compare_command(
     show = not quiet and out.is_terminal
     live_view = None
     if live:
-        from locoplan.sim.live import LiveView
+        from locoplan.sim.live import live_view_options
 
-        live_view = LiveView(port, 1.0 if pace is None else pace)
+        live_view = live_view_options(port, pace, wait)
         err.print(
             f"live view: Foxglove > Open connection > Foxglove WebSocket > ws://localhost:{port}"
-            f" ({' then '.join(labels)}; layout: docs/foxglove-layout.json)",
+            f" ({' then '.join(labels)}; layout: docs/foxglove-layout.json); each run starts"
+            f" when a client subscribes, at most {live_view.wait:g} s after its server is up",
             markup=False,
         )
     try:

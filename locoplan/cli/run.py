@@ -11,6 +11,7 @@ from locoplan.cli.common import (
     EXIT_RUN_BROKE,
     LIVE_PACE,
     LIVE_PORT,
+    LIVE_WAIT,
     MAX_SIM_TIME,
     PREPARING,
     _check_video_option,
@@ -73,6 +74,7 @@ def run_command(
     ),
     port: int = LIVE_PORT,
     pace: float | None = LIVE_PACE,
+    wait: float | None = LIVE_WAIT,
     max_sim_time: float = MAX_SIM_TIME,
 ) -> None:
     """Run one task script closed loop in MuJoCo (multi-contact MPC + WBC).
@@ -113,6 +115,8 @@ def run_command(
         _fail(EXIT_BAD_INPUT, f"--duration-scale must be positive, got {duration_scale}")
     if pace is not None and not live:
         _fail(EXIT_BAD_INPUT, "--pace applies with --live only")
+    if wait is not None and not live:
+        _fail(EXIT_BAD_INPUT, "--wait applies with --live only")
     scenario, text = _load_with_text_or_exit(file, max_sim_time)
     assert isinstance(scenario, Scenario)
     show = not quiet and out.is_terminal
@@ -122,7 +126,7 @@ def run_command(
     try:
         with interrupt.deferring():
             from locoplan.exceptions import SimulationError, SolverFailure
-            from locoplan.sim.live import LiveView
+            from locoplan.sim.live import live_view_options
             from locoplan.sim.run import RunOptions, run_scenario
 
             options = RunOptions(
@@ -134,7 +138,7 @@ def run_command(
                 qp_backend=qp_backend,
                 f_min=f_min,
                 video=None if video is None else Path(video),
-                live=LiveView(port, 1.0 if pace is None else pace) if live else None,
+                live=live_view_options(port, pace, wait) if live else None,
             )
             with _sim_progress(show) as bar:
                 # Until the first simulated step: building the scene and the controller, which
@@ -145,10 +149,12 @@ def run_command(
                 def on_progress(t: float, total: float) -> None:
                     bar.update(task_id, completed=t, total=total, description=scenario.name)
 
-                if live:
+                if options.live is not None:
                     err.print(
                         f"live view: Foxglove > Open connection > Foxglove WebSocket > "
-                        f"ws://localhost:{port} (layout: docs/foxglove-layout.json)",
+                        f"ws://localhost:{port} (layout: docs/foxglove-layout.json); the run "
+                        f"starts when a client subscribes, at most {options.live.wait:g} s "
+                        "after the server is up",
                         markup=False,
                     )
                 result = run_scenario(scenario, text, options, on_progress)

@@ -29,6 +29,7 @@ import contextlib
 import datetime as dt
 import functools
 import json
+import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -140,6 +141,7 @@ class RunLogWriter:
         self._joint_channel: foxglove.Channel | None = None
         self._joint_encoders: dict[tuple[str, ...], JointStatesEncoder] = {}
         self._server: Any = None  # foxglove.websocket.WebSocketServer, with `serve`
+        self._subscribed = threading.Event()  # set by the server's thread on a subscribe
 
         start_ns = time.time_ns()
         record = {
@@ -235,10 +237,10 @@ class RunLogWriter:
         encoder = self._tf_encoders.get(key)
         if encoder is None:
             encoder = self._tf_encoders[key] = FrameTransformsEncoder(*key)
-        if self._tf_channel is None:
-            self._tf_channel = self._proto_channel(topics.TF, fm.FrameTransforms)
         # Copies: the caller may pass live buffers (MuJoCo's) that change before encoding.
-        self._emit(self._tf_channel, ns, functools.partial(encoder.encode, ns, p.copy(), r.copy()))
+        self._emit(
+            self._tf_frames_channel(), ns, functools.partial(encoder.encode, ns, p.copy(), r.copy())
+        )
 
     def joint_states(
         self,
@@ -279,6 +281,11 @@ class RunLogWriter:
             ],
         )
         self._emit(self._joint_states_channel(), ns, msg.encode())
+
+    def _tf_frames_channel(self) -> foxglove.Channel:
+        if self._tf_channel is None:
+            self._tf_channel = self._proto_channel(topics.TF, fm.FrameTransforms)
+        return self._tf_channel
 
     def _joint_states_channel(self) -> foxglove.Channel:
         if self._joint_channel is None:
@@ -360,11 +367,21 @@ class RunLogWriter:
         server on the writer's context) until the file closes; returns the port (0 picks a
         free one). Retries for `bind_wait_s` while the port is still held (a previous run's
         server closing); then OSError."""
-        from foxglove.websocket import Capability
+        from foxglove.websocket import Capability, ServerListener
+
+        subscribed = self._subscribed
+
+        class _Listener(ServerListener):
+            def on_subscribe(self, client: Any, channel: Any) -> None:
+                subscribed.set()
 
         self._check_open()
         if self._server is not None:
             raise ValueError(f"RunLogWriter for {self.path} already serves on {self._server.port}")
+        # The robot's topics exist before the first tick, so a client can subscribe to them
+        # while the run waits for it (`wait_for_subscriber`); the rest appear as they log.
+        self._tf_frames_channel()
+        self._joint_states_channel()
         deadline = time.monotonic() + bind_wait_s
         while True:
             try:
@@ -373,6 +390,7 @@ class RunLogWriter:
                     host=host,
                     port=port,
                     capabilities=[Capability.Time],
+                    server_listener=_Listener(),
                     context=self._context,
                 )
                 break
@@ -382,6 +400,22 @@ class RunLogWriter:
                 time.sleep(0.05)
         self._server.broadcast_time(self._last_ns)
         return int(self._server.port)
+
+    def wait_for_subscriber(self, timeout_s: float) -> bool:
+        """Block until a client of `serve` has subscribed to a channel, at most `timeout_s`
+        (s); True if one has. A live view starts its run on this, so a viewer that connects
+        after the server is up (Foxglove reconnecting between `compare`'s two runs) sees the
+        run from its first tick instead of a part of it, or none."""
+        if self._server is None:
+            raise ValueError(f"RunLogWriter for {self.path} is not serving")
+        deadline = time.monotonic() + timeout_s
+        while not self._subscribed.is_set():
+            left = deadline - time.monotonic()
+            if left <= 0.0:
+                return False
+            # Short slices: a signal handler (Ctrl-C) runs between them.
+            self._subscribed.wait(min(left, 0.1))
+        return True
 
     @property
     def serving(self) -> bool:

@@ -1,11 +1,17 @@
 """Live view of a run: its log's channels served to Foxglove while it goes, paced.
 
 `run --live` starts foxglove-sdk's WebSocket server on the run's log writer
-(`RunLogWriter.serve`): the topics that go to the MCAP file are served too, with the
-simulation time as the server's time. The loop calls a `Pacer` after each recorded sample
-(every 10 ms simulated): it hands the queued messages to the server at once and sleeps so
-that simulated time advances `pace` times as fast as wall time (0: no sleeping). A run that
-falls behind its pace (a slow stretch, a busy core) is not made to sprint to catch up.
+(`RunLogWriter.serve`) once the controller is built (its kernels compiled or loaded): the
+topics that go to the MCAP file are served too, with the simulation time as the server's
+time. The run then waits, at most `wait` s, for a client to subscribe to a topic, so the
+viewer sees it from its first tick: Foxglove reconnects with a back-off of a second or more,
+and `compare --live`'s second run, 1-5 s of wall time, would otherwise be over or half over
+when it is back (in CI a test client that reconnected got no /tf message of a 1 s run).
+
+The loop calls a `Pacer` after each recorded sample (every 10 ms simulated): it hands the
+queued messages to the server at once and sleeps so that simulated time advances `pace` times
+as fast as wall time (0: no sleeping). A run that falls behind its pace (a slow stretch, a
+busy core) is not made to sprint to catch up.
 Without a live view the loop has no pacer and nothing here runs.
 """
 
@@ -17,17 +23,26 @@ from dataclasses import dataclass
 from locoplan.log.writer import RunLogWriter
 
 DEFAULT_PORT = 8765
+# How long (s) a live run waits for a client to subscribe before it starts without one.
+DEFAULT_WAIT_S = 30.0
 # Behind the pace by more than this (s of wall time), the pacer starts afresh from now.
 MAX_LAG_S = 0.25
 
 
 @dataclass(frozen=True, slots=True)
 class LiveView:
-    """Serve the run on 127.0.0.1:`port` (0: any free port), paced to `pace` x real time."""
+    """Serve the run on 127.0.0.1:`port` (0: any free port), paced to `pace` x real time,
+    starting when a client subscribes or after `wait` s (0: at once)."""
 
     port: int = DEFAULT_PORT
     pace: float = 1.0
+    wait: float = DEFAULT_WAIT_S
     host: str = "127.0.0.1"
+
+
+def live_view_options(port: int, pace: float | None, wait: float | None) -> LiveView:
+    """The live view of `--port`, `--pace` and `--wait` (None: their defaults)."""
+    return LiveView(port, 1.0 if pace is None else pace, DEFAULT_WAIT_S if wait is None else wait)
 
 
 class Pacer:

@@ -384,8 +384,6 @@ def run_scenario(
         )
     start = scenario.robot_start
     with writer if writer is not None else contextlib.nullcontext():
-        if writer is not None and options.live is not None:
-            writer.serve(options.live.port, options.live.host)
         loop = ClosedLoop(
             scene,
             desc,
@@ -396,9 +394,13 @@ def run_scenario(
             log=writer,
             pushes=options.pushes,
         )
-        if writer is not None and options.live is not None:
-            loop.pacer = Pacer(writer, options.live.pace)
         interrupt.check()  # the controller's kernels are compiled or loaded by now
+        if writer is not None and options.live is not None:
+            writer.serve(options.live.port, options.live.host)
+            if options.live.wait > 0.0:
+                writer.wait_for_subscriber(options.live.wait)
+                interrupt.check()
+            loop.pacer = Pacer(writer, options.live.pace)
         samples: list[RenderSample] = []
         rec = _run_recording(loop, plan.t_end, _Progress(progress, plan.t_end), options, samples)
         metrics = compute_metrics(scenario, plan, rec, options, log_path)
