@@ -20,7 +20,7 @@ import numpy as np
 from locoplan.envelope import ranges as rg
 from locoplan.envelope.geometry import Rect
 from locoplan.plan.profiles import peak_rate
-from locoplan.scenario.feasibility import turn_rate_limit
+from locoplan.scenario.feasibility import ceil_time, turn_rate_limit
 
 Doc = dict[str, Any]
 
@@ -109,7 +109,7 @@ class Draw:
         within `gait_limit` (the feasibility check's, same unit per s)."""
         rate = float(self.rng.uniform(rg.RATE_FLOOR * max_rate, max_rate))
         d = max(abs(amount) / rate, period)
-        d = math.ceil(d * 100.0 - 1e-6) / 100.0
+        d = ceil_time(d)
         while abs(amount) / d > max_rate + 1e-9:
             d = rt(d + 0.01)
         return within_gait(d, amount, gait_limit)

@@ -48,8 +48,9 @@ ROBOT_FOOTPRINT_RADIUS = math.hypot(0.09, 0.10)
 OVERLAP_TOLERANCE = 0.005
 
 
-def _ceil(t: float) -> float:
-    """A duration rounded up to 0.01 s (what a script writes), so the advice is feasible."""
+def ceil_time(t: float) -> float:
+    """A duration rounded up to 0.01 s (what a script writes), so the advice is feasible;
+    the envelope's generator rounds its drawn durations the same way."""
     return math.ceil(t * 100.0 - 1e-6) / 100.0
 
 
@@ -80,7 +81,7 @@ def _rate_issues(scenario: Scenario) -> list[LocatedIssue]:
                         f"at {v:.3g} m/s (1.5x the average: the speed ramps up and down); "
                         f"with a gait period of {period:g} s the legs step at most "
                         f"{v_max:.3g} m/s: give the walk at least "
-                        f"{_ceil(least_duration(dist, v_max)):.2f} s",
+                        f"{ceil_time(least_duration(dist, v_max)):.2f} s",
                     )
                 )
         angle = task.angle if isinstance(task, TurnTask | WalkTask) else None
@@ -88,7 +89,7 @@ def _rate_issues(scenario: Scenario) -> list[LocatedIssue]:
             amount = math.radians(abs(angle))
             rate = peak_rate(amount, task.duration)
             if rate > w_max + 1e-9:
-                need = _ceil(least_duration(amount, w_max))
+                need = ceil_time(least_duration(amount, w_max))
                 issues.append(
                     LocatedIssue(
                         ("tasks", i, "duration"),
