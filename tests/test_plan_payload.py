@@ -301,3 +301,59 @@ def test_envelope_scripts_are_not_refused(tmp_path: Path) -> None:
         scenario = load_scenario_file(path).scenario
         plan = compile_plan(scenario)  # raises InfeasiblePlanError if refused
         check_payload(plan, scenario.robot)
+
+
+PACKAGE_TRANSFER = Path(__file__).resolve().parents[1] / "scenarios" / "package-transfer.yaml"
+
+
+def _conveyor_at(x: float) -> str:
+    """scenarios/package-transfer.yaml with its conveyor's centre moved to (x, 0)."""
+    text = PACKAGE_TRANSFER.read_text()
+    assert "position: [0.35, 0.0, 0.0]" in text
+    return text.replace("position: [0.35, 0.0, 0.0]", f"position: [{x!r}, 0.0, 0.0]", 1)
+
+
+def test_drop_target_out_of_reach_is_refused_at_the_drop() -> None:
+    """A conveyor 1 m away: the hands would release the package 0.5 m short of it."""
+    with pytest.raises(PlanError) as info:
+        compile_plan(scenario_from_text(_conveyor_at(1.0)))
+    exc = info.value
+    assert exc.loc == ("tasks", 3) and exc.task_index == 3
+    assert exc.message.startswith("infeasible (reach): at the release of 'package' onto 'conveyor'")
+    assert "put the target nearer the robot" in exc.message
+    compile_plan(scenario_from_text(_conveyor_at(0.35)))  # the repository's own: placed
+
+
+def test_a_fixture_a_million_km_away_is_refused_not_planned_forever(tmp_path: Path) -> None:
+    """Found by the fuzz test: a fixture 1e9 m away made the drop's retreat last 9.5e9 s and
+    its clearance check sample it every 10 ms; `validate` never returned. A subprocess, so
+    that a hang fails on the timeout instead of holding the suite."""
+    import subprocess
+    import sys
+
+    path = _write(tmp_path, _conveyor_at(1.0e9), "far.yaml")
+    res = subprocess.run(
+        [sys.executable, "-m", "locoplan", "validate", str(path)],
+        capture_output=True, text=True, timeout=120, check=False,
+    )  # fmt: skip
+    assert res.returncode == 2, res.stdout + res.stderr
+    assert "infeasible (reach): at the release of 'package'" in res.stdout
+
+
+def test_clearance_check_samples_a_long_segment_at_most_max_times() -> None:
+    from locoplan.plan import constants as k
+    from locoplan.plan.clearance import Obstacle, track_clearance
+
+    plan = compile_plan(load_scenario(PACKAGE_TRANSFER))
+    calls: list[float] = []
+
+    class Counting(Obstacle):
+        def distance(self, p: tuple[float, float, float], t: float) -> float:
+            calls.append(t)
+            return 1.0
+
+    wall = Counting("wall", (5.0, 0.0, 0.5), (0.1, 0.1, 0.5), 0.0)
+    track = plan.manipulation.tracks[0]
+    c = track_clearance(track, plan.trunk, (wall,), 0.0, 1.0e7, 0.025, yaw_offsets=(0.0,))
+    assert len(calls) == k.MAX_CLEARANCE_SAMPLES + 1
+    assert calls[0] == 1.0e7 and c.minimum < 1.0

@@ -111,8 +111,9 @@ def track_clearance(
     give_up_below: float = -math.inf,
 ) -> Clearance:
     """Clearance of the hand sphere following `track` on [t0, t1] (s), sampled every `dt`
-    (and at t1), with the trunk on its planned path turned by each of `yaw_offsets` (rad;
-    None: 0 and +-the expected yaw error, see the module docstring). The hand point moves at
+    (and at t1; coarser where that would take more than MAX_CLEARANCE_SAMPLES), with the
+    trunk on its planned path turned by each of `yaw_offsets` (rad; None: 0 and +-the
+    expected yaw error, see the module docstring). The hand point moves at
     most about 2 m/s, so 10 ms samples miss at most 2 cm of a path that grazes an edge;
     thresholds are chosen with that in mind. The check stops early once the clearance is
     below `give_up_below` (m; a search that only wants paths better than one it has); then
@@ -120,7 +121,8 @@ def track_clearance(
     best = Clearance(math.inf, t0, "", None)
     if not obstacles or t1 < t0:
         return best
-    n = max(1, math.ceil((t1 - t0) / dt - 1e-9))
+    n = min(max(1, math.ceil((t1 - t0) / dt - 1e-9)), k.MAX_CLEARANCE_SAMPLES)
+    dt = max(dt, (t1 - t0) / n)
     minimum, when, what = math.inf, t0, ""
     first: float | None = None
     # Latest first: a candidate path is usually closest where it reaches its target, so a

@@ -11,7 +11,12 @@ from locoplan.plan.events import PlanEvent, sort_events
 from locoplan.plan.footholds import build_footholds
 from locoplan.plan.gait import FOOT_NAMES, build_contact_schedule
 from locoplan.plan.manipulation import build_manipulation
-from locoplan.plan.payload import check_grasp_reach, check_payload, with_lean_weights
+from locoplan.plan.payload import (
+    check_grasp_reach,
+    check_payload,
+    check_place_reach,
+    with_lean_weights,
+)
 from locoplan.plan.plan import Plan
 from locoplan.plan.tasks import plan_tasks, retime_quasi_static
 from locoplan.plan.trunk import build_trunk_path
@@ -118,6 +123,7 @@ def compile_plan(
         ),
     )
     check_grasp_reach(plan, scenario.robot)
+    check_place_reach(plan, scenario.robot, scenario.fixtures)
     check_payload(plan, scenario.robot)
     return with_lean_weights(plan, scenario.robot)
 

@@ -169,6 +169,12 @@ YAW_ERROR_MIN: Final = math.radians(0.5)
 TRUNK_POSITION_ERROR: Final = 0.02
 # Sampling period of the clearance check (s).
 CLEARANCE_DT: Final = 0.01
+# Most samples one clearance check takes (`clearance.track_clearance`): a window longer than
+# MAX_CLEARANCE_SAMPLES x CLEARANCE_DT (100 s) is sampled more coarsely. The envelope's
+# longest window is a whole locomotion script's (16.3 s on seed 90210), far inside it.
+# Without the bound a script with a fixture 1e9 m away made `validate` sample a 9.5e9 s
+# retreat every 10 ms and never return (found by tests/test_scenario_fuzz.py in CI).
+MAX_CLEARANCE_SAMPLES: Final = 10000
 # Tucked hand pose of the LEFT hand in trunk (m): close to the body and low, the forearms
 # hanging forward: with the trunk at its nominal 0.60 m the hand sphere's top is at 0.38 m,
 # below every table, platform and conveyor top of the envelope (0.40-0.55 m), and the hand
