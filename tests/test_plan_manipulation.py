@@ -339,7 +339,7 @@ objects:
   box: {shape: box, size: [0.2, 0.2, 0.15], mass: MASS, position: [0.33, 0.0, 0.545]}
 fixtures:
   table: {kind: table, position: [0.45, 0.0, 0.0], size: [0.4, 0.5, 0.47]}
-  platform: {kind: platform, position: [-0.45, -0.8, 0.0], size: [0.4, 0.5, 0.47]}
+  platform: {kind: platform, position: [-0.6, -0.45, 0.0], size: [0.4, 0.5, 0.47]}
 tasks:
   - {action: pick, object: box, start: 0.5, duration: 1.0}
   - {action: turn, angle: -90, start: 1.6, duration: 1.6}
