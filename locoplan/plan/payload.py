@@ -37,6 +37,8 @@ import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal
 
+import numpy as np
+
 from locoplan.exceptions import RobotDescriptionError
 from locoplan.plan import constants as k
 from locoplan.plan.errors import InfeasiblePlanError, PlanError
@@ -306,10 +308,9 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
             continue
         pose, t = found
         residual = _grip_residual(model, pose)
-        target = plan.object_target(hold.object).position
-        allowed = grasp_reach_limit()
-        if target is not None:
-            allowed = max(allowed, _inside_top(fixture, target[0], target[1]))
+        # This hold's planned place (an object may be picked and dropped more than once).
+        cx, cy, _ = plan.object_positions(np.array([hold.release - 1e-6]))[0]
+        allowed = max(grasp_reach_limit(), _inside_top(fixture, float(cx), float(cy)))
         if residual <= allowed:
             continue
         ahead = max(math.hypot(p[0], p[1]) for p in pose.p_hands_trunk)
