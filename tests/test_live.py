@@ -207,22 +207,14 @@ def test_live_port_in_use_is_bad_input(tmp_path: Path) -> None:
     assert "Traceback" not in res.stderr
 
 
-def test_pace_needs_live(tmp_path: Path) -> None:
+@pytest.mark.parametrize("flag", ["--pace", "--wait"])
+def test_live_options_need_live(tmp_path: Path, flag: str) -> None:
     (tmp_path / "stand.yaml").write_text(_stand("nolive", 1.0))
     res = subprocess.run(
-        [*LOCOPLAN, "run", "stand.yaml", "--pace", "1"],
+        [*LOCOPLAN, "run", "stand.yaml", flag, "1"],
         cwd=tmp_path, capture_output=True, text=True, timeout=60, check=False,
     )  # fmt: skip
-    assert res.returncode == 2 and "--pace applies with --live only" in res.stderr
-
-
-def test_wait_needs_live(tmp_path: Path) -> None:
-    (tmp_path / "stand.yaml").write_text(_stand("nolive", 1.0))
-    res = subprocess.run(
-        [*LOCOPLAN, "run", "stand.yaml", "--wait", "1"],
-        cwd=tmp_path, capture_output=True, text=True, timeout=60, check=False,
-    )  # fmt: skip
-    assert res.returncode == 2 and "--wait applies with --live only" in res.stderr
+    assert res.returncode == 2 and f"{flag} applies with --live only" in res.stderr
 
 
 def test_live_run_without_a_client_starts_after_wait(tmp_path: Path) -> None:

@@ -314,11 +314,11 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
         if residual <= allowed:
             continue
         ahead = max(math.hypot(p[0], p[1]) for p in pose.p_hands_trunk)
-        where = f" onto '{task.onto}'" if task.onto else ""
         raise InfeasiblePlanError(
-            f"infeasible (reach): at the release of '{hold.object}'{where} ({t:.2f} s) the "
-            f"hands' points are {residual:.3f} m beyond the arms' reach from the planned trunk "
-            f"pose (up to {ahead:.2f} m from the trunk's axis; allowed {allowed:.2f} m, the "
+            f"infeasible (reach): at the release of '{hold.object}' onto '{task.onto}' "
+            f"({t:.2f} s) the hands' points are {residual:.3f} m beyond the arms' reach from "
+            f"the planned trunk pose (up to {ahead:.2f} m from the trunk's axis; allowed "
+            f"{allowed:.2f} m, the "
             "object's planned centre from the edge of the fixture's top); put the target "
             "nearer the robot or walk up to it before the drop",
             hold.release_task,
@@ -329,9 +329,7 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
 def _inside_top(fixture: FixtureSpec, x: float, y: float) -> float:
     """How far (m) the point (x, y) lies inside the edges of `fixture`'s top (negative:
     outside)."""
-    c, s_ = math.cos(math.radians(fixture.yaw)), math.sin(math.radians(fixture.yaw))
-    dx, dy = x - fixture.position[0], y - fixture.position[1]
-    u, v = c * dx + s_ * dy, -s_ * dx + c * dy
+    u, v = fixture.local_xy(x, y)
     return min(fixture.size[0] / 2.0 - abs(u), fixture.size[1] / 2.0 - abs(v))
 
 

@@ -12,6 +12,7 @@ Every model is strict: a number must be written as a number (`start: "1.0"` and
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
@@ -152,6 +153,14 @@ class FixtureSpec(_Strict):
     @property
     def top_height(self) -> float:
         return self.size[2]
+
+    def local_xy(self, x: float, y: float) -> tuple[float, float]:
+        """The world point (x, y) (m) in the fixture's own frame: along its x and y axes from
+        the centre of its footprint."""
+        yaw = math.radians(self.yaw)
+        c, s = math.cos(yaw), math.sin(yaw)
+        dx, dy = x - self.position[0], y - self.position[1]
+        return c * dx + s * dy, -s * dx + c * dy
 
 
 class _TaskBase(_Strict):

@@ -157,9 +157,7 @@ def _on_fixture(scenario: Scenario, name: str, p: np.ndarray, fixture: str) -> b
     spec = scenario.objects[name]
     half_h = spec.size[0] if spec.shape == "sphere" else spec.size[2] / 2
     f = scenario.fixtures[fixture]
-    c, s = math.cos(math.radians(f.yaw)), math.sin(math.radians(f.yaw))
-    dx, dy = p[0] - f.position[0], p[1] - f.position[1]
-    lx, ly = c * dx + s * dy, -s * dx + c * dy
+    lx, ly = f.local_xy(float(p[0]), float(p[1]))
     reach_x = f.size[0] / 2
     if f.kind == "conveyor" and f.speed:
         # A belt delivers what it carries over its downstream end: an object riding off that
