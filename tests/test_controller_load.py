@@ -10,7 +10,10 @@ from plan_fixtures import scenario_from_text
 from locoplan.control.controller import (
     FOOT_FIXTURE_CLEARANCE,
     LOAD_LEAD,
+    LOAD_RAMP,
+    LOAD_RAMP_DOWN,
     LocoManipulationController,
+    rigid_pair_targets,
 )
 from locoplan.plan import compile_plan
 from locoplan.robot.description import load_robot_description
@@ -39,9 +42,9 @@ def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
     has no object between the hands, and the shift there once fell to zero with the measured
     load still on (the CoM reference jumped 7 cm forward; envelope seed 11, transfer-008 fell
     onto its target). Its size is the share `_lean_share` (the plan's lean weight for this
-    5 kg hold) of m_o d / (m + m_o) for the load counted (`shift_mass`) and the object's
-    planned offset d from the CoM reference, checked to 1 mm (the object path's cache rounds
-    times to 1 us)."""
+    5 kg hold, eased towards the release: `_lean_weights`) of m_o d / (m + m_o) for the load
+    counted (`shift_mass`) and the object's planned offset d from the CoM reference, checked
+    to 1 mm (the object path's cache rounds times to 1 us)."""
     plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
     desc = load_robot_description("hector")
     ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
@@ -56,7 +59,7 @@ def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
         obj = plan.object_positions(np.array([min(lead[0], hold.release - 1e-3)]))[0]
         d = obj[:2] - p_com[0, :2]
         full = mass[0] / (ctl.mass + mass[0]) * d
-        share = ctl._lean_share(np.array([np.linalg.norm(full)]), np.array([hold.lean_weight]))
+        share = ctl._lean_share(np.array([np.linalg.norm(full)]), ctl._lean_weights(lead))
         expected = -share[0] * full
         # Forward is +x (robot_start yaw 0): backwards wherever load is counted.
         assert mass[0] > 0.05 * hold.mass, t
@@ -120,13 +123,79 @@ def test_lean_share_leaves_equal_centre_of_pressure_margins_loaded_and_unloaded(
 
 
 def test_lean_weights_follow_the_holds_shift_window() -> None:
-    """`_lean_weights` gives a hold's plan weight from its grasp to LOAD_RAMP_DOWN after its
-    release (the window the CoM shift counts its load in) and 1 elsewhere."""
+    """`_lean_weights` gives a hold's plan weight from its grasp to LOAD_RAMP_DOWN before its
+    release, eases it to 0 (the equal-margin share) by the release, keeps that for
+    LOAD_RAMP_DOWN after it (the window the CoM shift counts its load in) and gives 1
+    elsewhere; in between it falls monotonically (smoothstep)."""
     plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
     desc = load_robot_description("hector")
     ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
     (hold,) = plan.holds
-    t = np.array([hold.grasp - 0.01, hold.grasp + 0.01, hold.release - 0.01, 99.0])
-    np.testing.assert_array_equal(
-        ctl._lean_weights(t), [1.0, hold.lean_weight, hold.lean_weight, 1.0]
+    assert hold.lean_weight > 0.0
+    t = np.array(
+        [
+            hold.grasp - 0.01,
+            hold.grasp + 0.01,
+            hold.release - LOAD_RAMP_DOWN - 0.01,
+            hold.release - 1e-6,
+            hold.release + 0.01,
+            99.0,
+        ]
     )
+    np.testing.assert_allclose(
+        ctl._lean_weights(t),
+        [1.0, hold.lean_weight, hold.lean_weight, 0.0, 0.0, 1.0],
+        atol=1e-9,
+    )
+    ramp = np.linspace(hold.release - LOAD_RAMP_DOWN, hold.release, 31)
+    w = ctl._lean_weights(ramp)
+    assert np.all(np.diff(w) <= 1e-12)
+    assert w[15] == pytest.approx(0.5 * hold.lean_weight, abs=1e-9)
+
+
+def test_shift_mass_is_the_measured_load_once_the_load_is_on() -> None:
+    """From LOAD_RAMP after the lift-off to the release, the CoM shift counts the load the
+    hands measure now at every time ahead, wherever the plan's ramp-down would already have
+    taken it off: with the whole weight measured 0.3 s before the release, every lead time
+    counts the whole mass; with 40 % measured for 0.25 s (the object resting partly on its
+    support), 40 % (to 2 g: what is left of the 30 ms filter after 0.25 s, 3 kg e^(-8.3)).
+    Before the load is on, the plan's ramp (corrected by the measurement) still leads it."""
+    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    (hold,) = plan.holds
+    weight = hold.mass * 9.81
+    t0 = hold.lift + LOAD_RAMP + 0.05
+    for t in np.arange(t0, hold.release - 0.3, 0.002):
+        ctl._update_load(float(t), weight)
+    t = hold.release - 0.3
+    ctl._update_load(t, weight)
+    lead = t + LOAD_LEAD + np.linspace(0.0, 0.6, 7)
+    np.testing.assert_allclose(ctl.shift_mass(lead), hold.mass, atol=1e-9)
+    assert ctl._planned_mass(lead)[-1] < 0.01 * hold.mass  # the plan's ramp has it gone
+    for k in range(125):  # the measured load falls to 40 %: the shift follows (decay-bounded)
+        ctl._update_load(t + 0.002 * (k + 1), 0.4 * weight)
+    np.testing.assert_allclose(ctl.shift_mass(lead), 0.4 * hold.mass, atol=2e-3)
+    # Before the load is on: the plan's ramp after the lift-off, led by LOAD_LEAD.
+    early = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    ctl2 = LocoManipulationController(PinocchioRobot(desc), desc, early)
+    ctl2._update_load(hold.lift, 0.0)
+    ahead = np.array([hold.lift + 0.5 * LOAD_RAMP])
+    np.testing.assert_allclose(ctl2.shift_mass(ahead), ctl2._planned_mass(ahead), atol=1e-9)
+
+
+def test_rigid_pair_targets_keep_the_pairs_place_and_turn_at_its_separation() -> None:
+    """Two hands holding one object: the targets keep the planned midpoint and the planned
+    direction from the right hand to the left, at the hands' present separation (the
+    object's), so they ask for no squeeze the object forbids (to 1e-12)."""
+    planned = np.array([[0.30, 0.09, 0.10], [0.30, -0.09, 0.12]])
+    now = np.array([[0.28, 0.13, 0.15], [0.33, -0.11, 0.05]])
+    out = rigid_pair_targets(planned, now)
+    np.testing.assert_allclose(out.mean(axis=0), planned.mean(axis=0), atol=1e-12)
+    sep = np.linalg.norm(out[0] - out[1])
+    assert sep == pytest.approx(np.linalg.norm(now[0] - now[1]), abs=1e-12)
+    d_out = (out[0] - out[1]) / sep
+    d_plan = (planned[0] - planned[1]) / np.linalg.norm(planned[0] - planned[1])
+    np.testing.assert_allclose(d_out, d_plan, atol=1e-12)
+    same = np.array([[0.3, 0.0, 0.1], [0.3, 0.0, 0.1]])
+    np.testing.assert_array_equal(rigid_pair_targets(same, now), same)

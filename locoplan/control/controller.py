@@ -87,6 +87,30 @@ OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before prunin
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
 
 
+def rigid_pair_targets(targets: FloatArray, p_hands: FloatArray) -> FloatArray:
+    """Targets (2, 3) for two hands holding one rigid object, from their planned targets (2, 3)
+    and where they are (2, 3): the planned midpoint and the planned direction from the right
+    hand to the left, at the hands' present separation.
+
+    Why: the grasp fixes the hands to the object (`locoplan.sim.grasp`: a constraint per hand
+    set where the hand is when it closes, up to GRASP_TOLERANCE from the side), so their
+    separation is the object's. The plan's targets lie GRASP_SQUEEZE inside the sides, which
+    asked the hands for 3-6 cm of squeeze the object forbids; the two Cartesian PDs then
+    pushed against each other through the object, and with the 3-DoF arms the pair wobbled:
+    hands 4-8 cm off their targets, one forward and up while the other went back and down,
+    boxes tilted 20-30 deg and set down askew, and the opening hands dragged them off their
+    target (envelope seeds 4711 and 5000: 6 light boxes ended on the floor). The separation
+    is the object's; what the hands can still be asked is where the pair is and how it is
+    turned, which keeps it level."""
+    d = targets[0] - targets[1]
+    n = float(np.linalg.norm(d))
+    if n < 1e-9:
+        return targets
+    mid = 0.5 * (targets[0] + targets[1])
+    half = (0.5 * float(np.linalg.norm(p_hands[0] - p_hands[1])) / n) * d
+    return np.array([mid + half, mid - half])
+
+
 def wrap_angle(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
@@ -578,9 +602,30 @@ class LocoManipulationController:
 
     def shift_mass(self, times: FloatArray) -> FloatArray:
         """Mass (kg) the held-load CoM shift is computed for at `times` (n,): as
-        `carried_mass`, but falling no faster than LOAD_RELEASE_DECAY allows, also for
-        LOAD_RAMP_DOWN after the release."""
-        return self._corrected(times, self._shift_offset, LOAD_RAMP_DOWN)
+        `carried_mass` while a load comes on (the plan's ramp after the lift-off, corrected by
+        the measurement), but falling no faster than LOAD_RELEASE_DECAY allows, also for
+        LOAD_RAMP_DOWN after the release. Once a held (not thrown) object's load is wholly on
+        (LOAD_RAMP after its lift-off), the shift takes the measured load as it is now for
+        every time ahead, until LOAD_RAMP_DOWN after the release: the load goes off when
+        the object rests on its support, which the hand load measures, not on the plan's
+        ramp-down.
+
+        Why: the plan's ramp-down, led by LOAD_LEAD, took the lean away 0.3-0.9 s before the
+        release while the hands still carried the whole load 0.3 m ahead; the combined CoM
+        went over the toes and the robot fell forward as it placed the object (envelope seed
+        4711: transfer-000, -004, -031, -045, 4.7-5.8 kg). Where the lean must go before the
+        release, the lean weight says so (`_lean_weights`)."""
+        out = self._corrected(times, self._shift_offset, LOAD_RAMP_DOWN)
+        now = self._load_t
+        if not math.isfinite(now):
+            return out
+        t = np.asarray(times, dtype=float)
+        for h in self.plan.holds:
+            if h.release_kind == "throw":
+                continue
+            if h.lift + LOAD_RAMP <= now < h.release + LOAD_RAMP_DOWN:
+                out = np.where(t >= h.grasp, self._mass_shift, out)
+        return out
 
     def _corrected(self, times: FloatArray, offset: float, extra: float) -> FloatArray:
         planned = self._planned_mass(times)
@@ -689,12 +734,21 @@ class LocoManipulationController:
     def _lean_weights(self, t_lead: FloatArray) -> FloatArray:
         """The plan's lean weight (n,) at the lead times t_lead (n,): the largest
         `lean_weight` of the holds whose shift window (grasp to LOAD_RAMP_DOWN after the
-        release, as `shift_mass`) contains the time; 1 outside every hold (no load there)."""
+        release, as `shift_mass`) contains the time; 1 outside every hold (no load there).
+        Before a drop's release the weight eases to 0 over LOAD_RAMP_DOWN (smoothstep), so
+        that the lean is the equal-margin share when the load goes off: a heavy hold's whole
+        shift (9-10 cm for 7.6 kg 0.34 m ahead) left the unloaded robot's CoM behind its
+        heels, while the equal share leaves it as far inside the heels as the loaded
+        combined CoM is inside the toes (`_lean_share`)."""
         t = np.asarray(t_lead, dtype=float)
         out = np.full(t.shape, -1.0)
         for h in self.plan.holds:
             inside = (t >= h.grasp) & (t < h.release + LOAD_RAMP_DOWN)
-            out = np.where(inside, np.maximum(out, h.lean_weight), out)
+            w = np.full(t.shape, h.lean_weight)
+            if h.release_kind == "drop" and math.isfinite(h.release):
+                down = np.clip((h.release - t) / LOAD_RAMP_DOWN, 0.0, 1.0)
+                w *= down * down * (3.0 - 2.0 * down)
+            out = np.where(inside, np.maximum(out, w), out)
         return np.where(out < 0.0, 1.0, out)
 
     def _held_times(self, t_lead: FloatArray) -> FloatArray:
@@ -816,12 +870,21 @@ class LocoManipulationController:
         v_hands = v_fr[2:4, :3]
         if self._supported:
             # Guarded lowering: once what the hands hold rests on something (the measured load
-            # is under SUPPORTED_LOAD of its mass), they stop pushing it further down.
+            # is under SUPPORTED_LOAD of its mass), they stop pushing it further down, and
+            # they stop pushing it sideways: they hold where they are (damped). The support
+            # anchors the object by friction, so a hand still tracking its planned point then
+            # pushes the trunk instead of the object: a 7.6 kg box set on a platform drew the
+            # trunk 4 cm back in the 0.2 s before its release and the robot fell backwards
+            # after it (envelope seed 4711, walk-carry-003).
             hand_targets, v_hand_des = hand_targets.copy(), v_hand_des.copy()
             for k in plan.holding_hands(t):
                 if hand_targets[k, 2] < p_hands[k, 2]:
                     hand_targets[k, 2] = p_hands[k, 2]
                     v_hand_des[k, 2] = max(0.0, float(v_hand_des[k, 2]))
+                hand_targets[k, :2] = p_hands[k, :2]
+                v_hand_des[k, :2] = 0.0
+        if len(plan.holding_hands(t)) == 2:
+            hand_targets = rigid_pair_targets(hand_targets, p_hands)
         hand_acc = self._hand_kp * (hand_targets - p_hands) + self._hand_kd * (v_hand_des - v_hands)
         tau_ext = self._object_generalized_force(t, mass_now, J_hands, hand_acc)
 

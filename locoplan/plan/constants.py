@@ -69,6 +69,14 @@ DROP_RELEASE: Final = 0.60
 DROP_OPEN_END: Final = 0.68
 DROP_BACK_SHARE: Final = 0.4
 DROP_HOVER_HEIGHT: Final = 0.04
+# The lowering ends this far (m) below where the object rests on its support, so that it is
+# set down by the release: the hands sag 1-2 cm under a 5-10 kg load and the trunk sinks, and a
+# lowering aimed at the resting height left a 10 kg block 0.5-1 cm up at the release, whose
+# whole weight then left the hands at once while the robot still leaned back against it (it
+# fell backwards: envelope seed 4711, standing-hold-022). The controller's guarded lowering
+# (`locoplan.control.controller`, SUPPORTED_LOAD) stops the hands once the support carries
+# the object, so the press does not push it down.
+DROP_PRESS: Final = 0.02
 # Margin between the object's footprint and the edge of a fixture's top (m).
 PLACE_MARGIN: Final = 0.02
 

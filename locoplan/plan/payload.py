@@ -174,11 +174,24 @@ def _hold_poses(plan: Plan, hold: ObjectHold, model: StaticModel | None) -> list
         carries = [worst]
     out = carries
     if hold.release_kind == "drop" and hold.release_task is not None:
-        found = _pose(plan, hold, hold.release_task, "lower")
+        found = _place_pose(plan, hold)
         if found is not None:
             pose, t = found
             out.append(PlannedHold(hold.object, hold.mass, "place", hold.release_task, t, pose))
     return out
+
+
+def _place_pose(plan: Plan, hold: ObjectHold) -> tuple[HeldPose, float] | None:
+    """The place pose of a dropped hold (at its release): the "lower" segment's end raised
+    by DROP_PRESS, where the object rests on its support (the lowering aims that far below
+    it; the hands stop where the support carries the object)."""
+    assert hold.release_task is not None
+    found = _pose(plan, hold, hold.release_task, "lower")
+    if found is None:
+        return None
+    pose, t = found
+    points = tuple((p[0], p[1], p[2] + k.DROP_PRESS) for p in pose.p_hands_trunk)
+    return replace(pose, p_hands_trunk=points), t
 
 
 def _grasp_pose(plan: Plan, hold: ObjectHold) -> PlannedHold | None:
@@ -303,7 +316,7 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
             continue
         task = plan.tasks[hold.release_task]
         fixture = fixtures.get(task.onto) if task.onto else None
-        found = _pose(plan, hold, hold.release_task, "lower")
+        found = _place_pose(plan, hold)
         if fixture is None or found is None:
             continue
         pose, t = found
