@@ -324,6 +324,26 @@ def test_drop_target_out_of_reach_is_refused_at_the_drop() -> None:
     compile_plan(scenario_from_text(_conveyor_at(0.35)))  # the repository's own: placed
 
 
+@pytest.mark.parametrize(("x", "refused"), [(0.53, False), (0.55, False), (0.57, True)])
+def test_a_drop_whose_object_would_end_at_the_edge_is_refused(x: float, refused: bool) -> None:
+    """The conveyor 0.53 / 0.55 / 0.57 m ahead: the hands miss the place points by 5.6 / 7.4 /
+    9.3 cm and the package's planned centre lies 12 cm inside the belt's near edge. Closed
+    loop, the first two are placed and the third is released at the edge and not placed
+    (PLACE_SLACK's docstring): the allowed miss leaves the centre PLACE_SLACK inside."""
+    from locoplan.plan.payload import PLACE_SLACK
+
+    scenario = scenario_from_text(_conveyor_at(x))
+    if not refused:
+        compile_plan(scenario)
+        return
+    with pytest.raises(PlanError) as info:
+        compile_plan(scenario)
+    msg = info.value.message
+    assert msg.startswith("infeasible (reach): at the release of 'package' onto 'conveyor'")
+    assert f"must stay {PLACE_SLACK:.2f} m inside it" in msg
+    assert "0.12 m inside the edge" in msg and "allowed 0.09 m" in msg
+
+
 def test_a_fixture_a_million_km_away_is_refused_not_planned_forever(tmp_path: Path) -> None:
     """Found by the fuzz test: a fixture 1e9 m away made the drop's retreat last 9.5e9 s and
     its clearance check sample it every 10 ms; `validate` never returned. A subprocess, so
