@@ -58,6 +58,12 @@ LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (g
 # only in the last moments before the release, and carrying it while the controller already
 # thinks it lighter made the hands sag and the robot fall forward after placing it.
 LOAD_RAMP_DOWN = 0.6  # s
+# Time constants of the hands' Cartesian PD (1/sqrt(kp), 50 ms at kp 400) over which a
+# two-hand release eases the pair's separation back to the plan's (`_released_pair_targets`):
+# 4 is the PD's settling time (2 %). Checked on the throws of envelope seeds 4711 and 27182
+# (40 of 40 as before), 16180's throw-000 (fell without it) and the 276 manipulation scripts
+# of seeds 4711 and 5000 (drops: the same runs succeed with and without it).
+RELEASE_BLEND_TAU_RATIO = 4.0
 LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
 # Time constant (s) of the low-pass filter on the measured hand load: above the 500 Hz tick's
 # contact noise, well below the 0.6-1.0 s load ramps it corrects.
@@ -227,6 +233,9 @@ class LocoManipulationController:
         self._mass_now = 0.0
         self._supported = False
         self._mass_shift = 0.0
+        # Last two-hand hold: (time, offset (3,) m of the pair's separation from the plan's).
+        self._pair_release: tuple[float, FloatArray] = (-math.inf, np.zeros(3))
+        self._pair_blend = RELEASE_BLEND_TAU_RATIO / math.sqrt(self.s.hand_kp_acc)
         self._hold_mass = sum(h.mass for h in plan.holds)
         starts = {task.index: task.start for task in plan.tasks}
         self._drop_windows = [
@@ -577,6 +586,28 @@ class LocoManipulationController:
         self._shift_offset = self._mass_shift - planned
         self._load_t = t
 
+    def _released_pair_targets(self, t: float, targets: FloatArray) -> FloatArray:
+        """Hand targets (2, 3) just after a two-hand release: the plan's, with the pair's
+        separation at the release (`rigid_pair_targets`: the object's width) easing into the
+        plan's (GRASP_SQUEEZE inside each side) over `_pair_blend` s (smoothstep).
+
+        Why: at the release the targets went back at once to the plan's, 2-6 cm closer
+        together than the hands stood on the object; in a throw that step came at the top of
+        the hands' speed, both shoulder rolls jumped to 0.84 of their limit within 20 ms, the
+        trunk was thrown 3 cm up and a foot came off the ground (envelope seed 16180,
+        throw-000, 1.48 kg at 1.9 m/s: the robot fell 1.3 s later). The blend time is
+        RELEASE_BLEND_TAU_RATIO time constants of the hands' Cartesian PD (1/sqrt(kp))."""
+        t_r, offset = self._pair_release
+        u = (t - t_r) / self._pair_blend
+        if u >= 1.0:
+            self._pair_release = (-math.inf, np.zeros(3))
+            return targets
+        fade = 1.0 - u * u * (3.0 - 2.0 * u)
+        out = np.array(targets, dtype=float, copy=True)
+        out[0] += 0.5 * fade * offset
+        out[1] -= 0.5 * fade * offset
+        return out
+
     def _placing(self, t: float) -> bool:
         """Whether a drop is putting a held object down at t (from the drop's start to its
         release): the only time the hands' guarded lowering applies (during a pick the
@@ -696,9 +727,25 @@ class LocoManipulationController:
         backward push whose own pitch torque makes it worse. So the robot starts leaning back
         (onto its heels, which is feasible without the load) just before the weight comes on.
 
+        The object's offset d is the larger of where it is planned at the lead time and at the
+        time concerned: the lean leads a load that comes on or goes out, but lags one that
+        comes in. Why: a pick lifts the object where it stood (0.3-0.35 m out) and then pulls
+        it in; with d at the lead time only, the lean was already the one for the pulled-in
+        object while the hands held it at the lift point, and the combined CoM stood on the
+        toes (0.0-0.4 cm inside) for 5.8-7.9 kg (envelope seed 16180, walk-carry-000, -002,
+        -013: fell). Measured on the manipulation scripts of seeds 4711 and 5000 (276
+        accepted): 253 -> 255 succeed (walk-carry +4 -3, transfer +2, hold -1); seed
+        16180: 112 -> 113 of the 120 run at both revisions (walk-carry +2, side-carry -1).
+
         From the lead times t_lead (n,) (the times concerned + LOAD_LEAD), the carried mass
         there (n,) kg and the CoM reference there (n, 3) m."""
         d = self._planned_object_positions(self._held_times(t_lead))[:, :2] - p_com[:, :2]
+        d_now = (
+            self._planned_object_positions(self._held_times(t_lead - LOAD_LEAD))[:, :2]
+            - p_com[:, :2]
+        )
+        far = np.einsum("ij,ij->i", d_now, d_now) > np.einsum("ij,ij->i", d, d)
+        d = np.where(far[:, None], d_now, d)
         s = (mass / (self.mass + mass))[:, None] * d
         share = self._lean_share(np.linalg.norm(s, axis=1), self._lean_weights(t_lead))
         return -share[:, None] * s
@@ -884,7 +931,11 @@ class LocoManipulationController:
                 hand_targets[k, :2] = p_hands[k, :2]
                 v_hand_des[k, :2] = 0.0
         if len(plan.holding_hands(t)) == 2:
+            gap = hand_targets[0] - hand_targets[1]
             hand_targets = rigid_pair_targets(hand_targets, p_hands)
+            self._pair_release = (t, hand_targets[0] - hand_targets[1] - gap)
+        elif math.isfinite(self._pair_release[0]):
+            hand_targets = self._released_pair_targets(t, hand_targets)
         hand_acc = self._hand_kp * (hand_targets - p_hands) + self._hand_kd * (v_hand_des - v_hands)
         tau_ext = self._object_generalized_force(t, mass_now, J_hands, hand_acc)
 
