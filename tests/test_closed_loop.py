@@ -149,3 +149,28 @@ def test_walk_square_closes(tmp_path: Path) -> None:
     assert np.linalg.norm(pos[-1, :2]) < 0.10
     assert abs(math.degrees(yaw[-1]) - 360.0) < 5.0
     _torques_within_limits(result)
+
+
+SHORT_WALKS = """
+version: 1
+name: short-walks
+gait: {period: 0.42, swing: 0.2}
+tasks:
+  - {action: walk, distance: [-0.098, -0.492], start: 0.1, duration: 1.76}
+  - {action: walk, distance: [-0.544, 0.719], angle: -11.3, start: 1.86, duration: 3.37}
+end: 6.23
+"""
+
+
+def test_a_walk_that_ends_short_stands_over_its_feet(tmp_path: Path) -> None:
+    """Two back-to-back walks (envelope seed 16180, locomotion-000) end 12 cm short of the
+    plan sideways, the feet 7 cm apart: the plan's CoM reference then lay 6 cm outside the
+    outer foot, the MPC asked both feet for its least force and the robot sank and fell 0.4 s
+    later. Standing, the reference is kept 2 cm inside the feet's support (`clamp_into_
+    support`): the robot stays at its height over its feet to the end."""
+    result = _run(tmp_path, SHORT_WALKS)
+    t, pos, _ = _trajectory(result)
+    assert not result.metrics["fell"]
+    assert result.metrics["peak_torque_ratio"] <= 1.0
+    after = t >= 5.3  # the second walk has ended
+    assert np.max(np.abs(pos[after, 2] - NOMINAL_HEIGHT)) < 0.03

@@ -1,0 +1,83 @@
+"""The support region of line feet on the ground and the nearest point inside it.
+
+Each foot is a segment along its yaw, from `heel` behind to `toe` ahead of its sole point
+(robot.yaml); the support region is the convex hull of the segments (a quadrilateral in
+double support). `clamp_into_support` moves a horizontal point into that hull shrunk by a
+margin, to the nearest point, by enumerating the active sets of the (at most four)
+half-planes: a least-distance problem this small needs no QP solver.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def foot_segments(p_feet: FloatArray, yaw_feet: FloatArray, toe: float, heel: float) -> FloatArray:
+    """End points (2 n, 2) of the line feet at p_feet (n, >=2) m with yaws (n,) rad."""
+    pts = []
+    feet = np.asarray(p_feet, dtype=float)
+    for p, yaw in zip(feet, np.asarray(yaw_feet, dtype=float), strict=True):
+        u = np.array([np.cos(yaw), np.sin(yaw)])
+        pts.append(p[:2] + toe * u)
+        pts.append(p[:2] - heel * u)
+    return np.array(pts)
+
+
+def convex_hull(points: FloatArray) -> FloatArray:
+    """Vertices (m, 2) of the convex hull of points (n, 2), counter-clockwise (monotone chain;
+    collinear points dropped)."""
+    pts = sorted({(float(x), float(y)) for x, y in np.asarray(points, dtype=float)})
+    if len(pts) <= 2:
+        return np.array(pts)
+
+    def cross(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list[tuple[float, float]] = []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0.0:
+            lower.pop()
+        lower.append(p)
+    upper: list[tuple[float, float]] = []
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0.0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def clamp_into_support(p: FloatArray, hull: FloatArray, margin: float) -> FloatArray:
+    """The point (2,) nearest to p (2,) inside the convex polygon `hull` (m, 2, CCW) shrunk by
+    `margin` m; p itself when it is inside. Where the shrunk polygon is empty (the feet too
+    close for the margin) or the hull has fewer than three vertices: the hull's centroid."""
+    p = np.asarray(p, dtype=float)
+    m = len(hull)
+    if m < 3:
+        return np.asarray(hull, dtype=float).mean(axis=0) if m else p
+    edges = np.roll(hull, -1, axis=0) - hull
+    normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # outward for a CCW polygon
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    offsets = np.einsum("ij,ij->i", normals, hull) - margin  # n . x <= offset inside
+    tol = 1e-12
+    if np.all(normals.dot(p) <= offsets + tol):
+        return p
+    best: FloatArray | None = None
+    best_d = np.inf
+    candidates = []
+    for i in range(m):  # one active half-plane: project onto its line
+        candidates.append(p - (normals[i].dot(p) - offsets[i]) * normals[i])
+    for i, j in itertools.combinations(range(m), 2):  # two: their lines' intersection
+        a = np.array([normals[i], normals[j]])
+        if abs(np.linalg.det(a)) > 1e-12:
+            candidates.append(np.linalg.solve(a, np.array([offsets[i], offsets[j]])))
+    for c in candidates:
+        if np.all(normals.dot(c) <= offsets + 1e-9):
+            d = float(np.linalg.norm(c - p))
+            if d < best_d:
+                best, best_d = c, d
+    return best if best is not None else np.asarray(hull, dtype=float).mean(axis=0)
