@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from plan_fixtures import repo_scenario
+from plan_fixtures import repo_scenario, scenario_from_text
 
 from locoplan.plan import compile_plan
 from locoplan.plan import constants as k
@@ -121,3 +121,43 @@ def test_throw_line_is_raised_to_clear_a_high_table() -> None:
     assert min(gaps) == pytest.approx(k.THROW_CLEARANCE, abs=0.002)
     again = clear_throw_line(raised, 0.05, (table,), 0.0)
     assert again.wind[2] == pytest.approx(raised.wind[2], abs=1e-5)
+
+
+EARLY_PICK_BESIDE_PLATFORM = """
+version: 1
+name: early-pick-beside-platform
+gait: {period: 0.4, swing: 0.18}
+objects:
+  parcel: {shape: box, size: [0.239, 0.104, 0.184], mass: 3.89,
+           position: [0.326, 0.203, 0.635], yaw: 31.9}
+fixtures:
+  table: {kind: table, position: [0.453, 0.282, 0.0], size: [0.516, 0.395, 0.543], yaw: 31.9}
+  platform: {kind: platform, position: [0.22, -0.32, 0.0], size: [0.4, 0.5, 0.45], yaw: -65.4}
+tasks:
+  - {action: turn, angle: 31.9, start: 0.0, duration: 0.52}
+  - {action: pick, object: parcel, start: 0.43, duration: 1.39}
+  - {action: turn, angle: -97.3, start: 1.82, duration: 2.51}
+  - {action: drop, object: parcel, onto: platform, start: 3.68, duration: 1.06}
+end: 4.9
+"""
+
+
+def test_a_hand_that_starts_near_one_fixture_keeps_clear_of_the_others() -> None:
+    """The right hand starts within APPROACH_CLEARANCE of the platform (the drop target beside
+    the robot): it only has to get no closer to that one, but its reach must keep the full
+    clearance from the table it reaches over. With one threshold for all obstacles, lowered
+    by the platform, the straight reach cut the table's edge by 0.7 cm and in MuJoCo the hand
+    stuck there 10 cm short of the grasp until the robot fell (envelope seed 14142,
+    transfer-002). Checked on the plan's own track, as the planner samples it (to 1 um)."""
+    from locoplan.plan.clearance import fixture_obstacle, track_clearance
+
+    scenario = scenario_from_text(EARLY_PICK_BESIDE_PLATFORM)
+    plan = compile_plan(scenario)
+    (hold,) = plan.holds
+    table = fixture_obstacle("table", scenario.fixtures["table"])
+    platform = fixture_obstacle("platform", scenario.fixtures["platform"])
+    right = plan.manipulation.tracks[1]
+    at_start = track_clearance(right, plan.trunk, (platform,), 0.0, 0.0, -math.inf)
+    assert at_start.minimum < k.APPROACH_CLEARANCE  # the case: it starts near the platform
+    reach = track_clearance(right, plan.trunk, (table,), 0.43, hold.grasp, -math.inf)
+    assert reach.minimum >= k.APPROACH_CLEARANCE - 1e-6

@@ -105,7 +105,7 @@ def track_clearance(
     obstacles: tuple[Obstacle, ...],
     t0: float,
     t1: float,
-    threshold: float,
+    threshold: float | tuple[float, ...],
     yaw_offsets: tuple[float, ...] | None = None,
     dt: float = k.CLEARANCE_DT,
     give_up_below: float = -math.inf,
@@ -117,10 +117,12 @@ def track_clearance(
     most about 2 m/s, so 10 ms samples miss at most 2 cm of a path that grazes an edge;
     thresholds are chosen with that in mind. The check stops early once the clearance is
     below `give_up_below` (m; a search that only wants paths better than one it has); then
-    `first_below` is only some time below the threshold, not the first."""
+    `first_below` is only some time below the threshold, not the first. `threshold` (m) is
+    one for every obstacle or one per obstacle (in the order of `obstacles`)."""
     best = Clearance(math.inf, t0, "", None)
     if not obstacles or t1 < t0:
         return best
+    limits = threshold if isinstance(threshold, tuple) else (threshold,) * len(obstacles)
     n = min(max(1, math.ceil((t1 - t0) / dt - 1e-9)), k.MAX_CLEARANCE_SAMPLES)
     dt = max(dt, (t1 - t0) / n)
     minimum, when, what = math.inf, t0, ""
@@ -129,7 +131,7 @@ def track_clearance(
     # search that gives up below a clearance it already has stops soonest that way.
     for i in range(n, -1, -1):
         t = min(t1, t0 + i * dt)
-        worst = math.inf
+        below = False
         if yaw_offsets is None:
             lag = max(k.YAW_ERROR_MIN, k.YAW_LAG_TIME * abs(trunk.pose_at(t)[5]))
             offsets: tuple[float, ...] = (0.0, -lag, lag)
@@ -144,13 +146,13 @@ def track_clearance(
         drift = math.dist(p0, p1)
         for off in offsets:
             p, _ = track.evaluate(t, base_pose(trunk, t, off))
-            for ob in obstacles:
+            for ob, limit in zip(obstacles, limits, strict=True):
                 d = ob.distance(p, t) - k.HAND_RADIUS - drift
-                if d < worst:
-                    worst = d
+                if d < limit:
+                    below = True
                 if d < minimum:
                     minimum, when, what = d, t, ob.name
-        if worst < threshold:
+        if below:
             first = t
         if minimum < give_up_below:
             break

@@ -168,7 +168,7 @@ def path_clearance(
     t1: float,
     trunk: TrunkPath,
     obstacles: tuple[Obstacle, ...],
-    threshold: float,
+    threshold: float | tuple[float, ...],
     give_up_below: float = -math.inf,
     initial: HandWaypoint | None = None,
 ) -> Clearance:
@@ -213,16 +213,25 @@ def approach_segments(
         extra: list[HandSegment],
         t0: float,
         t1: float,
-        threshold: float,
+        threshold: float | tuple[float, ...],
         give_up_below: float = -math.inf,
+        obs: tuple[Obstacle, ...] = obstacles,
     ) -> Clearance:
         return path_clearance(
-            hand, done, extra, t0, t1, trunk, obstacles, threshold, give_up_below, first
+            hand, done, extra, t0, t1, trunk, obs, threshold, give_up_below, first
         )
 
     direct = [HandSegment(start, t_end, cur, target, task_index, "reach")]
-    threshold = min(
-        k.APPROACH_CLEARANCE, gap(direct, t_free, t_free, -math.inf).minimum - k.APPROACH_SLACK
+    # Per obstacle: a hand that starts within APPROACH_CLEARANCE of one only has to get no
+    # closer to that one. (One threshold for all, lowered by whatever the hand started near,
+    # let a reach that started beside the platform cut the table's edge: envelope seed 14142,
+    # transfer-002, the right hand blocked 10 cm short of the grasp and the robot fell.)
+    threshold = tuple(
+        min(
+            k.APPROACH_CLEARANCE,
+            gap(direct, t_free, t_free, -math.inf, obs=(ob,)).minimum - k.APPROACH_SLACK,
+        )
+        for ob in obstacles
     )
     c_direct = gap(direct, t_free, t_end, threshold)
     if c_direct.first_below is None:
