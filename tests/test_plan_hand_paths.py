@@ -10,6 +10,7 @@ from plan_fixtures import repo_scenario, scenario_from_text
 
 from locoplan.plan import compile_plan
 from locoplan.plan import constants as k
+from locoplan.plan.clearance import fixture_obstacle, track_clearance
 from locoplan.plan.hand_paths import (
     carry_forward,
     grip_height,
@@ -149,8 +150,6 @@ def test_a_hand_that_starts_near_one_fixture_keeps_clear_of_the_others() -> None
     by the platform, the straight reach cut the table's edge by 0.7 cm and in MuJoCo the hand
     stuck there 10 cm short of the grasp until the robot fell (envelope seed 14142,
     transfer-002). Checked on the plan's own track, as the planner samples it (to 1 um)."""
-    from locoplan.plan.clearance import fixture_obstacle, track_clearance
-
     scenario = scenario_from_text(EARLY_PICK_BESIDE_PLATFORM)
     plan = compile_plan(scenario)
     (hold,) = plan.holds

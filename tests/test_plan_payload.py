@@ -21,6 +21,7 @@ from locoplan.plan import PlanError, compile_plan
 from locoplan.plan.payload import (
     LEAN_RATIO_HIGH,
     LEAN_RATIO_LOW,
+    PLACE_SLACK,
     check_payload,
     lean_weight,
     payload_margins,
@@ -330,8 +331,6 @@ def test_a_drop_whose_object_would_end_at_the_edge_is_refused(x: float, refused:
     9.3 cm and the package's planned centre lies 12 cm inside the belt's near edge. Closed
     loop, the first two are placed and the third is released at the edge and not placed
     (PLACE_SLACK's docstring): the allowed miss leaves the centre PLACE_SLACK inside."""
-    from locoplan.plan.payload import PLACE_SLACK
-
     scenario = scenario_from_text(_conveyor_at(x))
     if not refused:
         compile_plan(scenario)

@@ -314,9 +314,9 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
     `robot` misses from the planned trunk pose by more than the object could fall short and
     still rest on the fixture: the distance from its planned centre to the nearest edge of
     the fixture's top less PLACE_SLACK (at least the grasp's allowance,
-    `grasp_reach_limit`). Nothing else
-    refuses such a target: the format takes any fixture position, and the hands' paths
-    towards it are planned whatever their length (a conveyor 1000 km away validated as ok).
+    `grasp_reach_limit`). Nothing else refuses such a target: the format takes any fixture
+    position, and the hands' paths towards it are planned whatever their length (a conveyor
+    1000 km away validated as ok).
     Standing holds put back on their table miss by up to 5.5 cm (envelope seeds 31337,
     90210) and are placed: their centre is 14 cm inside the table's edge."""
     if not plan.holds:
@@ -345,8 +345,7 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
             f"the planned trunk pose (up to {ahead:.2f} m from the trunk's axis; allowed "
             f"{allowed:.2f} m: the object's planned centre lies {inside:.2f} m inside the "
             f"edge of the fixture's top and must stay {PLACE_SLACK:.2f} m inside it); put the "
-            "target "
-            "nearer the robot or walk up to it before the drop",
+            "target nearer the robot or walk up to it before the drop",
             hold.release_task,
             loc=("tasks", hold.release_task),
         )
