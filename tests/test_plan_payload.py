@@ -6,6 +6,7 @@ of the envelope's."""
 from __future__ import annotations
 
 import json
+import math
 import shutil
 from pathlib import Path
 
@@ -18,13 +19,16 @@ from locoplan.batch.worker import execute_job
 from locoplan.cli import app
 from locoplan.envelope import FAMILIES, generate_suite
 from locoplan.plan import PlanError, compile_plan
+from locoplan.plan.compiler import HURRIED_TURN_RATE
 from locoplan.plan.payload import (
     LEAN_RATIO_HIGH,
     LEAN_RATIO_LOW,
     PLACE_SLACK,
     check_payload,
+    grasp_reach_limit,
     lean_weight,
     payload_margins,
+    planned_grasp,
     planned_holds,
 )
 from locoplan.plan.statics import static_model
@@ -164,16 +168,56 @@ end: 7.59
 
 
 def test_grasp_out_of_reach_of_the_planned_trunk_is_refused_with_a_later_start() -> None:
+    # The pick starts in the turn's first tenth: even the quickest turn the planner may
+    # plan (HURRIED_TURN_RATE) faces the parcel only after the lift-off.
     with pytest.raises(PlanError) as info:
-        compile_plan(scenario_from_text(EARLY_TURNING_PICK % "1.94"))
+        compile_plan(scenario_from_text(EARLY_TURNING_PICK % "0.30"))
     exc = info.value
     assert exc.loc == ("tasks", 1) and exc.task_index == 1
     assert exc.message.startswith("infeasible (reach): at the lift-off of 'parcel'")
     assert "m beyond the arms' reach" in exc.message
     later = float(exc.message.split("start the pick at ")[1].split(" s")[0])
-    assert 1.94 < later < 2.81
+    assert 0.30 < later < 2.81
     # The advice holds: starting there, the plan reaches its grasp (and is not refused).
     compile_plan(scenario_from_text(EARLY_TURNING_PICK % f"{later:.2f}"))
+
+
+def test_a_pick_early_in_a_long_turn_hurries_the_turn_to_face_the_object() -> None:
+    """A pick in the last half of the turn (inside issue 12's envelope) whose lift-off comes
+    before the trunk faces the parcel: the planner ends the turn sooner, within the rate it
+    may plan, instead of refusing the script, and says so."""
+    scenario = scenario_from_text(EARLY_TURNING_PICK % "1.94")
+    plan = compile_plan(scenario)
+    written = scenario.tasks[0]
+    turn = plan.tasks[0]
+    assert turn.action == "turn" and turn.start == 0.0
+    amount = math.radians(145.1)
+    # Sooner than written, no quicker than the planner's cap, and only as much as needed:
+    # the written turn misses the grasp, the hurried one keeps it within the limit.
+    assert amount / HURRIED_TURN_RATE - 0.01 <= turn.end < written.duration
+    # The turn ends by the lift-off, so the trunk faces the parcel while the hands close.
+    grasp = planned_grasp(plan, 1, "hector")
+    assert grasp is not None
+    lift_off, residual = grasp
+    # (durations round up to 0.01 s, as a script writes them)
+    assert turn.end <= lift_off + 0.01 and residual <= grasp_reach_limit()
+    assert plan.notes == (
+        f"task 1 (turn by 145 deg) ends at {turn.end:.2f} s instead of 3.69 s so that the "
+        "trunk faces 'parcel' at its lift-off",
+    )
+    assert plan.to_dict()["notes"] == list(plan.notes)
+    # Every other task keeps its written times.
+    assert [(t.start, t.end) for t in plan.tasks[1:]] == [
+        (t.start, t.start + t.duration) for t in scenario.tasks[1:]
+    ]
+
+
+def test_plan_prints_what_the_planner_changed(tmp_path: Path) -> None:
+    path = _write(tmp_path, EARLY_TURNING_PICK % "1.94")
+    result = runner.invoke(app, ["plan", str(path)])
+    assert result.exit_code == 0, result.output
+    assert "planner: task 1 (turn by 145 deg) ends at " in result.output
+    assert "so that the trunk faces 'parcel' at its lift-off" in " ".join(result.output.split())
 
 
 def test_validate_plan_run_and_compare_refuse_with_file_line_column(tmp_path: Path) -> None:

@@ -39,7 +39,9 @@ def plan_command(
 
     Prints the tasks with their planned start and end (re-timed for quasi-static),
     the stance/swing phases of each foot, the reach/grasp/carry/release phases
-    of each hand, the object-held intervals, a reference summary
+    of each hand, the object-held intervals, what the planner changed in the
+    script's timing and why (a turn hurried so that the trunk faces an object
+    at its lift-off), a reference summary
     (final position and yaw, total time) and the static payload margins of
     each carry and place pose (reach, worst torque ratio, centre of mass,
     payload limit).
@@ -74,6 +76,8 @@ def plan_command(
     except PlanError as exc:
         _fail(EXIT_BAD_INPUT, plan_error_message(exc, file, text))
     out.print(plan_table(plan))
+    for note in plan.notes:
+        out.print(f"planner: {note}", markup=False, highlight=False)
     if margins:
         out.print(payload_table(margins))
     if json_path is not None:

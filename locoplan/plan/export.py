@@ -98,6 +98,7 @@ def plan_to_dict(plan: Plan, reference_dt: float = 0.02) -> dict[str, Any]:
                 for b in plan.contacts.blocks
             ],
         },
+        "notes": list(plan.notes),
         "tasks": [
             {
                 "index": t.index,

@@ -298,6 +298,19 @@ def check_grasp_reach(plan: Plan, robot: str) -> None:
         )
 
 
+def planned_grasp(plan: Plan, pick_task: int, robot: str) -> tuple[float, float] | None:
+    """The lift-off time (s) of the pick `pick_task` and how far (m) the arms of `robot`
+    miss its grip points then from the planned trunk pose (None: no such pick)."""
+    for hold in plan.holds:
+        if hold.pick_task != pick_task:
+            continue
+        grasp = _grasp_pose(plan, hold)
+        if grasp is None:
+            return None
+        return grasp.time, _grip_residual(_model(robot), grasp.pose)
+    return None
+
+
 # How far (m) inside the edge of its target's top an object released short of its planned
 # place must still have its centre: the hands' closing tolerance (GRASP_TOLERANCE, what they
 # may be off the points they track). Without it a centre that ended at the edge was allowed:

@@ -65,7 +65,8 @@ class Plan:
     quasi-static re-timing moved the end (s, 0 for dynamic); `gait_period`, `gait_swing`: the
     scenario's nominal gait (each locomotion task's own fit is in `contacts.blocks`);
     `footprints`: each fixture's footprint on the floor as (x, y, yaw, half_x, half_y) (m, rad,
-    world), where no foot may stand or land (fixtures are solid from the floor up).
+    world), where no foot may stand or land (fixtures are solid from the floor up);
+    `notes`: what the planner changed in the script's timing and why (one sentence each).
     """
 
     scenario_name: str
@@ -83,6 +84,7 @@ class Plan:
     manipulation: ManipulationPlan
     events: tuple[PlanEvent, ...]
     footprints: tuple[tuple[float, float, float, float, float], ...] = ()
+    notes: tuple[str, ...] = ()
 
     # --- feet (sigma_C1, sigma_C2) ---------------------------------------------------------
     def foot_stance(self, foot: int | str, t: float | npt.ArrayLike) -> bool | BoolArray:
