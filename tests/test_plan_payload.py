@@ -220,6 +220,30 @@ def test_plan_prints_what_the_planner_changed(tmp_path: Path) -> None:
     assert "so that the trunk faces 'parcel' at its lift-off" in " ".join(result.output.split())
 
 
+@pytest.mark.closed_loop
+def test_a_hurried_turn_picks_and_places_in_mujoco(tmp_path: Path) -> None:
+    """Closed loop: the script that the planner used to refuse runs, says what the planner
+    changed, and the parcel ends on the platform with the robot standing (MuJoCo's state,
+    as the run's metrics report it)."""
+    path = _write(
+        tmp_path,
+        EARLY_TURNING_PICK % "1.94"
+        + "expect: {no_fall: true, max_torque_ratio: 1.0, placed: {parcel: platform}}\n",
+    )
+    metrics_path = tmp_path / "metrics.json"
+    result = runner.invoke(
+        app,
+        ["run", str(path), "--out", str(tmp_path / "runs"), "--metrics-json", str(metrics_path)],
+    )
+    assert result.exit_code == 0, result.output
+    assert "planner: task 1 (turn by 145 deg) ends at " in result.output
+    metrics = json.loads(metrics_path.read_text())
+    assert len(metrics["planner_notes"]) == 1
+    assert not metrics["fell"] and metrics["peak_torque_ratio"] <= 1.0
+    assert metrics["objects"]["parcel"]["on"] == "platform"
+    assert not metrics["objects"]["parcel"]["held"]
+
+
 def test_validate_plan_run_and_compare_refuse_with_file_line_column(tmp_path: Path) -> None:
     path = _write(tmp_path, hold_script(30.0))
     for args in (

@@ -186,6 +186,8 @@ def run_command(
         except OSError as exc:
             _fail(EXIT_BAD_INPUT, f"cannot write {metrics_json}: {exc.strerror or exc}")
     if not quiet:
+        for note in result.plan.notes:
+            out.print(f"planner: {note}", markup=False, highlight=False)
         out.print(metrics_table(result.metrics))
     raise typer.Exit(EXIT_OK if result.passed else EXIT_EXPECTATION)
 

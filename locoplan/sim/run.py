@@ -283,6 +283,8 @@ def compute_metrics(
         "mpc_fallbacks": rec.n_mpc_fallbacks,
         "wbc_failures": rec.n_wbc_failures,
         "task_goal_times": [None if x is None else round(x, 3) for x in times],
+        # What the planner changed in the script's timing and why (`Plan.notes`).
+        "planner_notes": list(plan.notes),
     }
     expect = scenario.expect.model_dump(exclude_none=True)
     results = expectation_results(expect, metrics)
