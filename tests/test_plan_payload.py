@@ -212,6 +212,42 @@ def test_a_pick_early_in_a_long_turn_hurries_the_turn_to_face_the_object() -> No
     ]
 
 
+# A pick (right hand) early in a turn, with or without a cup held in the left hand through
+# that turn (the cup's pick is the line marked CUP).
+TURNING_PICK_WITH_A_CUP = """version: 1
+name: two-picks
+gait: {period: 0.37, swing: 0.18}
+objects:
+  cup: {shape: box, size: [0.06, 0.06, 0.08], mass: 0.3, position: [0.27, 0.1, 0.59], yaw: 0}
+  parcel: {shape: box, size: [0.08, 0.08, 0.1], mass: 0.5,
+           position: [-0.27, 0.15, 0.6], yaw: 145.1}
+fixtures:
+  shelf: {kind: table, position: [0.4, 0.1, 0.0], size: [0.3, 0.3, 0.55], yaw: 0}
+  table: {kind: table, position: [-0.417, 0.291, 0.0], size: [0.402, 0.576, 0.546], yaw: 145.1}
+tasks:
+  - {action: pick, object: cup, hands: left, start: 0.0, duration: 1.0}  # CUP
+  - {action: turn, angle: 145.1, start: 1.0, duration: 3.69}
+  - {action: pick, object: parcel, hands: right, start: 2.1, duration: 0.87}
+end: 6.0
+"""
+
+
+def test_a_hurried_turn_is_slower_while_another_object_is_held() -> None:
+    # Empty-handed, the turn may be hurried to 90 deg/s: 145.1 deg in 1.62 s.
+    alone = TURNING_PICK_WITH_A_CUP.replace(
+        "  - {action: pick, object: cup, hands: left, start: 0.0, duration: 1.0}  # CUP\n", ""
+    )
+    plan = compile_plan(scenario_from_text(alone))
+    turn = plan.tasks[0]
+    assert turn.action == "turn"
+    assert math.radians(145.1) / turn.duration == pytest.approx(HURRIED_TURN_RATE, rel=0.01)
+    # Holding the cup it may not go over 65 deg/s (HURRIED_LOADED_TURN_RATE), which
+    # leaves the parcel out of reach at its lift-off.
+    with pytest.raises(PlanError) as info:
+        compile_plan(scenario_from_text(TURNING_PICK_WITH_A_CUP))
+    assert info.value.message.startswith("infeasible (reach): at the lift-off of 'parcel'")
+
+
 def test_plan_prints_what_the_planner_changed(tmp_path: Path) -> None:
     path = _write(tmp_path, EARLY_TURNING_PICK % "1.94")
     result = runner.invoke(app, ["plan", str(path)])

@@ -158,6 +158,9 @@ def _assemble(
 # The quickest turn (average rate, rad/s) that `_face_the_pick` plans: the locomotion
 # envelope's turns go up to 90 deg/s (README, Envelope), closed loop on every seed measured.
 HURRIED_TURN_RATE = math.radians(90.0)
+# The same while the robot carries another object through the turn: issue 12's transfers
+# turn loaded at up to 65 deg/s (README, Envelope), the fastest loaded turns measured.
+HURRIED_LOADED_TURN_RATE = math.radians(65.0)
 # How much sooner (s) the hurried turn ends at each try when the hands, planned afresh, lift
 # the object later than planned for the written turn.
 HURRY_STEP = 0.05
@@ -180,7 +183,8 @@ def _face_the_pick(
     keeps its start and angle and ends at the lift-off planned for the written turn (then the
     trunk stands facing the object while the hands close, as in any pick from in front), or
     sooner by HURRY_STEP while the hands planned afresh lift later, but no quicker than
-    HURRIED_TURN_RATE on average nor than the hip yaw range allows at the gait's period
+    HURRIED_TURN_RATE on average (HURRIED_LOADED_TURN_RATE while another object is held
+    through the turn) nor than the hip yaw range allows at the gait's period
     (`locoplan.scenario.feasibility.turn_rate_limit`). The robot stands facing the object
     until the turn's written end.
     Ending it only as early as the reach check needs was tried first: on the tuning seeds
@@ -199,7 +203,12 @@ def _face_the_pick(
     if turn is None or turn.angle is None:
         raise exc
     amount = abs(turn.angle)
-    rate = min(HURRIED_TURN_RATE, turn_rate_limit(scenario.gait.period) * (1.0 - CRUISE_RAMP))
+    loaded = any(
+        h.pick_task != pick.index and h.lift < turn.end and h.release > turn.start
+        for h in plan.holds
+    )
+    cap = HURRIED_LOADED_TURN_RATE if loaded else HURRIED_TURN_RATE
+    rate = min(cap, turn_rate_limit(scenario.gait.period) * (1.0 - CRUISE_RAMP))
     shortest = ceil_time(amount / rate)
     if shortest >= turn.duration:
         raise exc
