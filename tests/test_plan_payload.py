@@ -202,8 +202,8 @@ def test_a_pick_early_in_a_long_turn_hurries_the_turn_to_face_the_object() -> No
     # (durations round up to 0.01 s, as a script writes them)
     assert turn.end <= lift_off + 0.01 and residual <= grasp_reach_limit()
     assert plan.notes == (
-        f"task 1 (turn by 145 deg) ends at {turn.end:.2f} s instead of 3.69 s so that the "
-        "trunk faces 'parcel' at its lift-off",
+        f"the turn by 145 deg from 0.00 s ends at {turn.end:.2f} s instead of 3.69 s so that "
+        "the trunk faces 'parcel' at its lift-off",
     )
     assert plan.to_dict()["notes"] == list(plan.notes)
     # Every other task keeps its written times.
@@ -252,7 +252,7 @@ def test_plan_prints_what_the_planner_changed(tmp_path: Path) -> None:
     path = _write(tmp_path, EARLY_TURNING_PICK % "1.94")
     result = runner.invoke(app, ["plan", str(path)])
     assert result.exit_code == 0, result.output
-    assert "planner: task 1 (turn by 145 deg) ends at " in result.output
+    assert "planner: the turn by 145 deg from 0.00 s ends at " in result.output
     assert "so that the trunk faces 'parcel' at its lift-off" in " ".join(result.output.split())
 
 
@@ -272,7 +272,7 @@ def test_a_hurried_turn_picks_and_places_in_mujoco(tmp_path: Path) -> None:
         ["run", str(path), "--out", str(tmp_path / "runs"), "--metrics-json", str(metrics_path)],
     )
     assert result.exit_code == 0, result.output
-    assert "planner: task 1 (turn by 145 deg) ends at " in result.output
+    assert "planner: the turn by 145 deg from 0.00 s ends at " in result.output
     metrics = json.loads(metrics_path.read_text())
     assert len(metrics["planner_notes"]) == 1
     assert not metrics["fell"] and metrics["peak_torque_ratio"] <= 1.0

@@ -217,7 +217,9 @@ def _face_the_pick(
         return tuple(replace(t, end=t.start + duration) if t is turn else t for t in tasks)
 
     grasp = planned_grasp(plan, pick.index, scenario.robot)
-    if grasp is None:
+    # A lift-off after the written turn's end already faces the object: the grip points are
+    # too far, which no turn mends.
+    if grasp is None or grasp[0] >= turn.end - HURRY_STEP:
         raise exc
     # Plan the hands afresh for the hurried turn and check it as any plan; a lift-off that
     # moves later with it may need the turn a little shorter still (a few tries, each a full
@@ -230,7 +232,7 @@ def _face_the_pick(
             tries.append(d)
     for duration in tries:
         note = (
-            f"task {turn.index + 1} (turn by {math.degrees(amount):.0f} deg) ends at "
+            f"the turn by {math.degrees(amount):.0f} deg from {turn.start:.2f} s ends at "
             f"{turn.start + duration:.2f} s instead of {turn.end:.2f} s so that the trunk faces "
             f"'{pick.object}' at its lift-off"
         )
