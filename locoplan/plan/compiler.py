@@ -45,7 +45,9 @@ def compile_plan(
     Raises `PlanError` for a scenario the compiler cannot honour (overlapping locomotion, an
     object not held when dropped, an unknown object or fixture, a task ending after `end`),
     and for a carry or place pose the robot cannot hold statically (`locoplan.plan.payload`:
-    `infeasible (payload)` / `infeasible (balance)`, located at the task).
+    `infeasible (payload)` / `infeasible (balance)`, located at the task). A pick whose grip
+    points are out of reach at its lift-off is refused (`infeasible (reach)`) unless hurrying
+    the turn it starts in mends it (`_face_the_pick`; the plan's `notes` then say so).
     """
     strategy = scenario.strategy if strategy is None else strategy
     if strategy not in STRATEGIES:
