@@ -24,12 +24,15 @@ from locoplan.plan.payload import (
     LEAN_RATIO_HIGH,
     LEAN_RATIO_LOW,
     PLACE_SLACK,
+    PRE_LEAN_MAX,
+    PRE_LEAN_TOL,
     check_payload,
     grasp_reach_limit,
     lean_weight,
     payload_margins,
     planned_grasp,
     planned_holds,
+    pre_lean_room,
 )
 from locoplan.plan.statics import static_model
 from locoplan.scenario import load_scenario, load_scenario_file
@@ -98,6 +101,35 @@ def test_lean_weight_rises_with_the_holds_static_torque_ratio() -> None:
         weights.append(hold.lean_weight)
         assert plan.to_dict()["holds"][0]["lean_weight"] == hold.lean_weight  # `plan --json`
     assert weights[0] == 0.0 and 0.1 < weights[1] < 0.5 and weights[2] == 1.0, weights
+
+
+def test_pre_lean_room_is_how_far_back_the_arms_still_reach_the_grip() -> None:
+    """`pre_lean_room`: moving the trunk back from the grasp pose by the room leaves both
+    arms reaching their grip points (reach margin >= 0), by one search step more does not;
+    a box further out leaves less room, and one at the arms' full stretch none. The plan's
+    hold carries it (`ObjectHold.pre_lean`, and the plan JSON)."""
+    from dataclasses import replace as dc_replace
+
+    model = static_model("hector")
+    rooms = []
+    for x in (0.30, 0.356, 0.42):
+        text = hold_script(6.0).replace(
+            "position: [0.356, 0.0, 0.543]", f"position: [{x}, 0.0, 0.543]"
+        )
+        plan = compile_plan(scenario_from_text(text))
+        grasp = planned_holds(plan)[0]
+        room = pre_lean_room(model, grasp.pose)
+        (hold,) = plan.holds
+        assert hold.pre_lean == room and plan.to_dict()["holds"][0]["pre_lean"] == room
+        rooms.append(room)
+
+        def margin(b: float, pose=grasp.pose) -> float:
+            pts = tuple((p[0] + b, p[1], p[2]) for p in pose.p_hands_trunk)
+            return model.postures.arms(dc_replace(pose, p_hands_trunk=pts))[2]
+
+        if 0.0 < room < PRE_LEAN_MAX:
+            assert margin(room) >= 0.0 > margin(room + 2 * PRE_LEAN_TOL), (x, room)
+    assert rooms[0] > rooms[1] > rooms[2] == 0.0, rooms
 
 
 def test_check_refuses_the_carry_pose_at_the_pick() -> None:

@@ -45,7 +45,7 @@ from locoplan.control.wbc import (
 )
 from locoplan.control.wbc_kernels import stack_tasks
 from locoplan.exceptions import SolverFailure
-from locoplan.plan import Plan
+from locoplan.plan import ObjectHold, Plan
 from locoplan.robot.conventions import pin_base_rotation
 from locoplan.robot.description import RobotDescription
 from locoplan.robot.pinocchio_model import PinocchioRobot
@@ -277,6 +277,10 @@ class LocoManipulationController:
         if s.mapping == "wbc":
             wbc_kernels.warm_up(robot.nv)
         self._nominal_geometry()
+        # Each hold that leans before its lift-off, and when it leans (`_pre_lean`).
+        self._pre_lean_windows = [
+            (h, *self._pre_lean_window(h)) for h in plan.holds if self._leans_before_lift(h)
+        ]
 
     # -- set-up --------------------------------------------------------------------------------
     def _nominal_geometry(self) -> None:
@@ -456,7 +460,9 @@ class LocoManipulationController:
         # times + LOAD_LEAD) joins the same evaluation when a load is on.
         t_lead = np.concatenate([[t], times]) + LOAD_LEAD
         mass_lead = self.shift_mass(t_lead)
-        loaded = bool(np.any(mass_lead > 0.0))
+        loaded = bool(np.any(mass_lead > 0.0)) or any(
+            t0 <= t < h.lift + LOAD_RAMP for h, t0, _ in self._pre_lean_windows
+        )
         n_td = len(keys)
         eval_times = np.concatenate(
             [times, [t], [x for _, x in keys], t_lead if loaded else np.zeros(0)]
@@ -541,11 +547,23 @@ class LocoManipulationController:
         11 -> 14 succeed; with the carry clearance, seed 2026, 137 -> 150 of 200 (dynamic).
         Its cost: issue 12's walk-carry-6kg falls 1.0 s into its walk with it (and succeeds
         without it); where the planned path has kinks (segment joins) the second differences
-        over the MPC's 30 ms steps are their largest, which is where to look next."""
-        grid = t + dt * np.arange(0, n + 2, dtype=np.float64)
+        over the MPC's 30 ms steps are their largest, which is where to look next.
+
+        Only points where the plan holds the object (lift-off to release: `Plan.object_held`,
+        where `Plan.object_positions` is the object's) enter the stencil. It once took the
+        hold window from the grasp and tested the times before the cache's rounding to the
+        microsecond: a horizon point that fell on the release (every third update, the grid
+        being t + 0.03 k with t on a 10 ms grid) was held for the test and the trunk's
+        position for the cache, a 0.35 m jump: 393 m/s^2 at the release step, a fake push of
+        some 300 N on the hands with the load then counted (envelope seed 22360,
+        standing-hold-020, 7.6 kg: the first-step foot forces swung 100-400 N at 33 Hz while
+        the block was set down, and the robot fell after the release)."""
+        # On the microsecond grid of `_planned_object_positions`, so that the held test
+        # below and the positions agree at the release's and the lift-off's instants.
+        grid = np.rint((t + dt * np.arange(0, n + 2, dtype=np.float64)) * 1e6) * 1e-6
         p = self._planned_object_positions(grid)
         a = (p[2:] - 2.0 * p[1:-1] + p[:-2]) / (dt * dt)
-        inside = self._hold_window(grid, 0.0)[0]
+        inside = self.plan.object_held(grid)
         a[~(inside[:-2] & inside[1:-1] & inside[2:])] = 0.0
         return a
 
@@ -771,7 +789,74 @@ class LocoManipulationController:
         d = np.where(far[:, None], d_now, d)
         s = (mass / (self.mass + mass))[:, None] * d
         share = self._lean_share(np.linalg.norm(s, axis=1), self._lean_weights(t_lead))
-        return -share[:, None] * s
+        shift = -share[:, None] * s
+        pre = self._pre_lean(t_lead - LOAD_LEAD, p_com)
+        bigger = np.einsum("ij,ij->i", pre, pre) > np.einsum("ij,ij->i", shift, shift)
+        return np.where(bigger[:, None], pre, shift)
+
+    def _pre_lean(self, t: FloatArray, p_com: FloatArray) -> FloatArray:
+        """CoM reference shift (n, 2) at the times t (n,) that has each hold's equal-margin
+        share of the load shift (`_lean_share` with weight 0) in place by its planned lift-off,
+        for the object where it is gripped then (from the CoM reference p_com (n, 3)),
+        capped at the hold's `pre_lean` (the room the arms' reach leaves at the grasp, from
+        the plan). It eases in over `_pre_lean_windows` before the lift-off and stays until
+        LOAD_RAMP after it, where the measured load has taken over (`shift_mass`);
+        `_com_shift` takes it where it is the larger. It stays the lean for the object where
+        it was lifted while the hands pull it in: with the offsets the shift counts after the
+        lift-off (the pulled-in object's), walk-carry-015 and -017 below fell again.
+
+        Why: the load ramp and its LOAD_LEAD leave the lean at about a tenth of the shift at
+        the lift-off, but the box leaves its table within 0.1-0.2 s of it. The measured load
+        then pulled the lean back 4-5 cm in one step; the MPC answered with a first-step
+        vertical force near f_min (it buys the friction for a large backward push over the
+        next steps), the trunk sank 5 cm, the combined CoM passed the toes, and the turn that
+        followed walked the robot forward off its reference until a hip saturated (envelope
+        seed 22360: walk-carry-000, -015, -017, 6.2-7.75 kg, fell in the turn after the pick;
+        with the lean in place all three place their box)."""
+        out = np.zeros((len(t), 2))
+        for h, t0, t1 in self._pre_lean_windows:
+            inside = (t >= t0) & (t < h.lift + LOAD_RAMP)
+            if not inside.any():
+                continue
+            p_o = self._planned_object_positions(np.array([h.lift + 1e-3]))[0, :2]
+            s = (h.mass / (self.mass + h.mass)) * (p_o[None, :] - p_com[:, :2])
+            size = np.linalg.norm(s, axis=1)
+            x = np.minimum(self._lean_share(size, np.zeros(len(t))) * size, h.pre_lean)
+            u = np.clip((t - t0) / (t1 - t0), 0.0, 1.0)
+            ramp = np.where(inside, u * u * (3.0 - 2.0 * u), 0.0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                unit = np.where(size[:, None] > 1e-9, s / size[:, None], 0.0)
+            out -= (ramp * x)[:, None] * unit
+        return out
+
+    def _leans_before_lift(self, hold: ObjectHold) -> bool:
+        """Whether `hold` gets the pre-lift lean (`_pre_lean`): the arms leave it room
+        (`ObjectHold.pre_lean` > 0) and a foot steps within LOAD_RAMP of its lift-off (the
+        plan's contact schedule, on a 10 ms grid), before the measured-load lean has come on.
+
+        Why only then: the falls it answers all came in the first steps after the pick (a
+        turn or walk started while the lean still followed the load); standing, the lean
+        catches up with the measured load as before. Leaning early where nothing steps lost
+        two of the repository's checks and gained nothing: the 10 kg standing hold sank 5 cm
+        half a second after its lift (the block went back onto its table), and the heavy fast
+        throw's hop after the release landed the feet together."""
+        if hold.pre_lean <= 0.0:
+            return False
+        times = hold.lift + np.arange(0.0, LOAD_RAMP + 1e-9, 0.01)
+        return not bool(np.all(self.plan.contact_flags(times)))
+
+    def _pre_lean_window(self, hold: ObjectHold) -> tuple[float, float]:
+        """When (s) the pre-lift lean of `hold` (`_pre_lean`) starts and is complete: it
+        ends at the lift-off and takes T = sqrt(6 x z / (g l)) for a lean of x =
+        `hold.pre_lean` (its cap), the CoM height z and half the feet's support length l
+        (robot.yaml's toe and heel): a smoothstep over T peaks at 6 x / T^2, the CoM
+        acceleration that puts the zero-moment point l from the CoM, so the lean never asks
+        the feet for a centre of pressure beyond their support. It starts at 0 at the
+        earliest (then it is quicker)."""
+        half = 0.5 * (self.desc.foot_toe + self.desc.foot_heel)
+        T = math.sqrt(6.0 * hold.pre_lean * self.com_height / (GRAVITY * half))
+        t0 = max(hold.lift - T, 0.0)
+        return t0, max(hold.lift, t0 + 1e-3)
 
     def _lean_share(self, size: FloatArray, weight: FloatArray) -> FloatArray:
         """Share (n,) of the full load shift of size `size` (n,) m that the CoM reference

@@ -86,7 +86,11 @@ class ObjectHold:
     the held-load lean the controller adds to its equal-margin share while this object is held
     (0: the equal-margin share, 1: the whole shift that centres robot and load over the feet);
     the compiler sets it from the hold's static torque ratio (`locoplan.plan.payload.
-    lean_weight`), and 1 (the whole shift) stands until then.
+    lean_weight`), and 1 (the whole shift) stands until then. `pre_lean` (m): how far the
+    trunk may stand back from the object at the lift-off with the arms still reaching its grip
+    points (`locoplan.plan.payload.pre_lean_room`): the controller leans back before the
+    load comes on by the equal-margin share of the shift, at most this far; 0 until the
+    compiler sets it.
     """
 
     object: str
@@ -102,6 +106,7 @@ class ObjectHold:
     yaw_in_grasp: float
     grip_height: float = 0.0
     lean_weight: float = 1.0
+    pre_lean: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)

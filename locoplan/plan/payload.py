@@ -74,6 +74,11 @@ PoseKind = Literal["grasp", "carry", "place"]
 # seeds 8080 and 9191, 200 scripts each (README).
 LEAN_RATIO_LOW = 1.0 / 3.0
 LEAN_RATIO_HIGH = 2.0 / 3.0
+# Largest pre-lift lean (m) `pre_lean_room` looks for, and its search step (m): the
+# equal-margin share of the shift is at most half the support length (7.5 cm for HECTOR's
+# line feet) for every envelope load, and 5 mm is a quarter of the hands' tracking error.
+PRE_LEAN_MAX = 0.10
+PRE_LEAN_TOL = 0.005
 # Time step (s) of the search for a later lift-off that reaches a grasp (refusal advice).
 GRASP_REACH_STEP = 0.02
 
@@ -224,16 +229,53 @@ def lean_weight(ratio: float) -> float:
 
 def with_lean_weights(plan: Plan, robot: str) -> Plan:
     """`plan` with each hold's `lean_weight` set from its worst static torque ratio over its
-    carry and place poses (`lean_weight`); the ratios are those `check_payload` computed
-    (memoised in the robot's `StaticModel`)."""
+    carry and place poses (`lean_weight`; the ratios are those `check_payload` computed,
+    memoised in the robot's `StaticModel`) and its `pre_lean` from the arms' reach at the
+    grasp (`pre_lean_room`)."""
     if not plan.holds:
         return plan
     model = _model(robot)
     holds = []
     for hold in plan.holds:
         ratios = [model.ratio_at_centre(p.pose, p.mass) for p in _hold_poses(plan, hold, model)]
-        holds.append(replace(hold, lean_weight=lean_weight(max(ratios, default=0.0))))
+        grasp = _grasp_pose(plan, hold)
+        room = pre_lean_room(model, grasp.pose) if grasp is not None else 0.0
+        holds.append(
+            replace(hold, lean_weight=lean_weight(max(ratios, default=0.0)), pre_lean=room)
+        )
     return replace(plan, manipulation=replace(plan.manipulation, holds=tuple(holds)))
+
+
+def pre_lean_room(model: StaticModel, pose: HeldPose) -> float:
+    """How far (m, at most PRE_LEAN_MAX, on a PRE_LEAN_TOL grid) the trunk may move back from
+    the grasp pose `pose`, away from the grip points' midpoint (horizontally), with both arms
+    still reaching them (`StaticPostures.arms` reach margin >= 0); 0 when they are already at
+    full stretch. Why: the controller leans back before the lift-off so that the combined
+    centre of mass stays over the feet when the load comes on (`locoplan.control.controller`
+    `_pre_lean`); leaning by more than this room stretched the arms past their reach at the
+    grasp, the hands closed on the box 5 cm above their grip points and the box hung that
+    much lower through the carry (envelope seed 17320, walk-carry-027: 7.99 kg at 0.38 m,
+    room 0; it touched its platform 0.7 s before the release and the robot fell backwards)."""
+    mx = sum(p[0] for p in pose.p_hands_trunk) / len(pose.p_hands_trunk)
+    my = sum(p[1] for p in pose.p_hands_trunk) / len(pose.p_hands_trunk)
+    norm = math.hypot(mx, my)
+    if norm < 1e-9:
+        return 0.0
+    ux, uy = mx / norm, my / norm
+
+    def reaches(b: float) -> bool:
+        moved = tuple((p[0] + b * ux, p[1] + b * uy, p[2]) for p in pose.p_hands_trunk)
+        return model.postures.arms(replace(pose, p_hands_trunk=moved))[2] >= 0.0
+
+    if not reaches(0.0):
+        return 0.0
+    lo, hi = 0.0, PRE_LEAN_MAX
+    if reaches(hi):
+        return hi
+    while hi - lo > PRE_LEAN_TOL:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if reaches(mid) else (lo, mid)
+    return lo
 
 
 def _model(robot: str) -> StaticModel:
