@@ -778,6 +778,9 @@ class LocoManipulationController:
         accepted): 253 -> 255 succeed (walk-carry +4 -3, transfer +2, hold -1); seed
         16180: 112 -> 113 of the 120 run at both revisions (walk-carry +2, side-carry -1).
 
+        Where a hold leans before its lift-off (`_pre_lean`), the larger of the two shifts
+        counts.
+
         From the lead times t_lead (n,) (the times concerned + LOAD_LEAD), the carried mass
         there (n,) kg and the CoM reference there (n, 3) m."""
         d = self._planned_object_positions(self._held_times(t_lead))[:, :2] - p_com[:, :2]
@@ -803,7 +806,8 @@ class LocoManipulationController:
         LOAD_RAMP after it, where the measured load has taken over (`shift_mass`);
         `_com_shift` takes it where it is the larger. It stays the lean for the object where
         it was lifted while the hands pull it in: with the offsets the shift counts after the
-        lift-off (the pulled-in object's), walk-carry-015 and -017 below fell again.
+        lift-off (the pulled-in object's), seed 22360's walk-carry-015 and -017 (below) fell
+        again.
 
         Why: the load ramp and its LOAD_LEAD leave the lean at about a tenth of the shift at
         the lift-off, but the box leaves its table within 0.1-0.2 s of it. The measured load

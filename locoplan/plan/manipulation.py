@@ -88,9 +88,9 @@ class ObjectHold:
     the compiler sets it from the hold's static torque ratio (`locoplan.plan.payload.
     lean_weight`), and 1 (the whole shift) stands until then. `pre_lean` (m): how far the
     trunk may stand back from the object at the lift-off with the arms still reaching its grip
-    points (`locoplan.plan.payload.pre_lean_room`): the controller leans back before the
-    load comes on by the equal-margin share of the shift, at most this far; 0 until the
-    compiler sets it.
+    points (`locoplan.plan.payload.pre_lean_room`): where a foot steps within a second of
+    the lift-off, the controller leans back before the load comes on by the equal-margin
+    share of the shift, at most this far; 0 until the compiler sets it.
     """
 
     object: str
