@@ -277,12 +277,16 @@ def bottom_of_parcel(plan: Plan, times: np.ndarray) -> np.ndarray:
 
 def test_a_carried_box_clears_the_fixtures_it_sweeps_over() -> None:
     # Carried at the pick's height, the box's bottom (0.514 m) ran into the side of the
-    # platform while the robot turned towards it: from the pick's end until the drop starts,
-    # its planned bottom stays CARRY_CLEARANCE over the higher of the two tops.
+    # platform while the robot turned towards it: from the end of the move that carries it
+    # up (`_carry_end`: early in the 3 s turn) until the drop starts, its planned bottom
+    # stays CARRY_CLEARANCE over the higher of the two tops.
     plan = compile_plan(scenario_from_text(SWEPT_TRANSFER))
     pick = next(t for t in plan.tasks if t.action == "pick")
+    turn = plan.tasks[2]
     drop = next(t for t in plan.tasks if t.action == "drop")
-    times = np.linspace(pick.end, drop.start, 60)
+    carry = next(g for g in plan.manipulation.tracks[0].segments if g.label == "carry")
+    assert pick.end <= carry.t1 < turn.start + (turn.end - turn.start) / 4
+    times = np.linspace(carry.t1, drop.start, 60)
     assert bottom_of_parcel(plan, times).min() >= 0.526 + k.CARRY_CLEARANCE - 1e-9
 
 
@@ -368,7 +372,9 @@ def test_the_pull_in_is_gentle_unless_a_heavy_object_must_be_in_before_the_first
         most = pull_accel(mass) * (raise_.t1 - raise_.t0) ** 2 * math.sqrt(3.0) / 10.0
         assert 0.0 < pulled <= most + 1e-12
         (pull,) = pulls
-        assert pull.t0 == pick.end and pull.end.point[0] == pytest.approx(carry_in(0.10))
+        carry = next(g for g in segments if g.label == "carry")
+        assert pull.t0 == carry.t1 >= pick.end
+        assert pull.end.point[0] == pytest.approx(carry_in(0.10))
     else:
         assert not pulls
         assert pulled == pytest.approx(0.33 - carry_in(0.10), abs=1e-9)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 
@@ -378,7 +379,12 @@ def test_balance_refusal_with_a_robot_whose_legs_bound_the_load(tmp_path: Path) 
     assert f"{path}:10:5: infeasible (balance): in the carry pose of 'block'" in result.output
     assert "m ahead of the toes even with the pelvis" in result.output
     assert "the most the legs allow" in result.output
-    assert f"carry at most {int(limit * 10) / 10:.1f} kg" in result.output
+    # The heavier load is carried a little higher over its table (`carry_clearance` grows
+    # with the mass: 0.4 cm/kg beyond 5 kg), so the limit the message states, that of the
+    # heavy script's carry pose, is within 2 % of the light one's.
+    stated = re.search(r"carry at most ([0-9.]+) kg", result.output)
+    assert stated is not None, result.output
+    assert float(stated.group(1)) == pytest.approx(limit, rel=0.02)
 
 
 def test_plan_prints_the_margins_and_writes_them_to_json(tmp_path: Path) -> None:
