@@ -14,8 +14,10 @@ themselves (approach, retreat, throw line) are `locoplan.plan.hand_paths`. Geome
   straight up, then brought up to CARRY_HEIGHT in trunk as far ahead as it was picked, and
   settles in to CARRY_FORWARD while the hands are free; one carried through locomotion is
   pulled in to `carry_in` (its near face CARRY_IN_GAP from the trunk's front), no faster than
-  `pull_accel` allows for its mass: as far as that goes during the raise, the rest after the
-  pick's end (until its object's drop starts), and stays there.
+  `pull_accel` allows for its mass: as far as that goes during the raise, the rest in the
+  carry move, up to the carry height and in at once, which takes the time it needs past the
+  pick's end (`_carry_move`; a "pull" after it if the object's drop comes first), and stays
+  there.
 - drop: the object's centre goes to `at`, or onto the fixture's top at the fully supported
   point nearest the robot's planned position at the release instant; the grasp axis is across
   the robot-to-target direction. The object hovers above the place point (moving with the
@@ -375,7 +377,8 @@ class _Builder:
         forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
         # Carried through locomotion: in to `carry_in` (hand_paths). The raise pulls it in
         # by `pull` (m, along the approach) as it goes up, no faster than `pull_accel` for its
-        # mass, and the rest of the way (to `x_in`, m ahead of the trunk) after the pick's end;
+        # mass, and the rest of the way (to `x_in`, m ahead of the trunk) in the carry move
+        # (`_carry_move`: up and in at once, past the pick's end if it needs the time);
         # a heavy object (PULL_FAST_SHARE) comes the whole way during the raise if the robot
         # stands on both feet meanwhile (constants' ARM_MOVING_MASS).
         pull = 0.0
@@ -434,9 +437,12 @@ class _Builder:
             self.add(h, HandSegment(t_reach, t_contact, w_pre, w_touch, i, "squeeze"))
             self.add(h, HandSegment(t_contact, t_lift, w_touch, w_grip, i, "grip"))
             self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
-            t_carry = self._carry_end(task, t_raise, raised, carry, accel, t_settle)
+            t_carry, x_to = self._carry_move(task, t_raise, raised, carry, x_in, accel, t_settle)
+            carry = (x_to, carry[1], carry[2])
+            w_carry = HandWaypoint(carry, "trunk")
             self.add(h, HandSegment(t_raise, t_carry, w_raised, w_carry, i, "carry"))
             t_end = t_carry
+            forward = x_to
             settles = not moving and abs(forward - k.CARRY_FORWARD) > 1e-3
             if settles and t_settle - t_carry >= k.CARRY_SETTLE_MIN:
                 dist, took = settle_in(abs(forward - k.CARRY_FORWARD), t_settle - t_carry)
@@ -457,21 +463,24 @@ class _Builder:
         self.events.append(PlanEvent(t_contact, "grasp", task.index, name))
         self.events.append(PlanEvent(t_lift, "lift", task.index, name))
 
-    def _carry_end(
+    def _carry_move(
         self,
         task: PlannedTask,
         t_raise: float,
         raised: Vec3,
         carry: Vec3,
+        x_in: float,
         accel: float,
         t_free: float,
-    ) -> float:
-        """When (s) the "carry" move of a pick, from the `raised` world point at `t_raise` to
-        the `carry` point in trunk, ends: at the pick's end, unless that would accelerate the
-        load faster than `pull_accel` allows for its mass (`accel`, m/s^2: the arms' and the
-        object's reaction on the trunk held to HAND_ACCEL_LIMIT's force, as for a pull-in or
-        a drop's lowering); then the move takes the time it needs, past the pick's end while
-        the hands have nothing else to do, up to `t_free` (the next task that uses them).
+    ) -> tuple[float, float]:
+        """(end s, how far ahead m) of the "carry" move of a pick: from the `raised` world
+        point at `t_raise` up to the `carry` point in trunk and, for an object carried through
+        locomotion, in towards `x_in` (m ahead of the trunk) at the same time. The move peaks
+        at `accel` (m/s^2, `pull_accel` for the load: the arms' and the object's reaction on
+        the trunk held to HAND_ACCEL_LIMIT's force, as for a drop's lowering). It ends at the
+        pick's end or when it needs, past the pick's end while the hands have nothing else to
+        do, up to `t_free` (the next task that uses them); it goes in as far as that time
+        allows (a "pull" segment does the rest), and at the least up to the carry height.
 
         Why: at the phase fractions alone, the carry gets the last 15 % of the pick's window.
         A box carried to a higher platform is raised to clear it on the way (10-12 cm), and
@@ -479,10 +488,24 @@ class _Builder:
         hands 0.2 m ahead of the trunk within 0.1 s. The MPC's forces fell to their minimum,
         the trunk sank 10 cm and lurched 13 cm towards the box, and the robot fell in the
         turn that followed (envelope seed 26457: walk-carry-021, -023, -025, -028 fell, the
-        four picks of that seed's 200 scripts with the largest such push)."""
+        four picks of that seed's 200 scripts with the largest such push). Up and in at
+        once, not one after the other: a 5.6 kg box raised first and pulled in only then
+        stayed 0.3 s longer 0.3 m ahead while the robot stepped, and the stance hip pitch
+        saturated (seed 22360, transfer-002, fell)."""
         start = world_to_trunk(self.trunk, t_raise, raised)
-        need = rest_to_rest_duration(math.dist(start, carry), accel)
-        return min(max(task.end, t_raise + need), max(task.end, t_free))
+        t_latest = max(task.end, t_free)
+
+        def need(x: float) -> float:
+            return rest_to_rest_duration(math.dist(start, (x, carry[1], carry[2])), accel)
+
+        x_to = min(x_in, carry[0])
+        if t_raise + need(x_to) > t_latest:
+            # As far in as the time allows: the 3D move within rest_to_rest_distance.
+            reach = rest_to_rest_distance(t_latest - t_raise, accel)
+            across = (carry[1] - start[1]) ** 2 + (carry[2] - start[2]) ** 2
+            room = reach * reach - across
+            x_to = carry[0] if room <= 0.0 else max(x_to, min(carry[0], start[0] - room**0.5))
+        return min(max(task.end, t_raise + need(x_to)), t_latest), x_to
 
     def _release_hold(self, task: PlannedTask, kind: Literal["drop", "throw"]) -> _OpenHold:
         name = task.object or ""
