@@ -131,7 +131,7 @@ CARRY_HEIGHT: Final = 0.02
 TRUNK_FRONT: Final = 0.07
 CARRY_IN_GAP: Final = 0.03
 # A held object is carried with its bottom at least this far (m) above the top of every
-# fixture it can sweep over while held (see `ManipulationPlanner.swept_top`): 2 cm of
+# fixture it can sweep over while held (see `manipulation._Builder.swept_top`): 2 cm of
 # clearance plus the 2 cm by which the trunk and hands sag under a carried 4-6 kg box
 # (measured in the transfer family's closed loops, envelope seed 5). Heavier loads add
 # CARRY_SAG_PER_KG (m/kg) of sag per kg beyond CARRY_SAG_FROM (kg): the sag is the trunk's
