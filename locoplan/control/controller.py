@@ -277,9 +277,16 @@ class LocoManipulationController:
         if s.mapping == "wbc":
             wbc_kernels.warm_up(robot.nv)
         self._nominal_geometry()
-        # Each hold that leans before its lift-off, and when it leans (`_pre_lean`).
+        # Each hold that leans before its lift-off, when it leans, and where (x, y) its object
+        # is gripped at the lift-off (`_pre_lean`; the plan fixes it, so once here).
         self._pre_lean_windows = [
-            (h, *self._pre_lean_window(h)) for h in plan.holds if self._leans_before_lift(h)
+            (
+                h,
+                *self._pre_lean_window(h),
+                self._planned_object_positions(np.array([h.lift + 1e-3]))[0, :2],
+            )
+            for h in plan.holds
+            if self._leans_before_lift(h)
         ]
 
     # -- set-up --------------------------------------------------------------------------------
@@ -461,7 +468,7 @@ class LocoManipulationController:
         t_lead = np.concatenate([[t], times]) + LOAD_LEAD
         mass_lead = self.shift_mass(t_lead)
         loaded = bool(np.any(mass_lead > 0.0)) or any(
-            t0 <= t < h.lift + LOAD_RAMP for h, t0, _ in self._pre_lean_windows
+            t0 <= t < h.lift + LOAD_RAMP for h, t0, _, _ in self._pre_lean_windows
         )
         n_td = len(keys)
         eval_times = np.concatenate(
@@ -818,11 +825,10 @@ class LocoManipulationController:
         seed 22360: walk-carry-000, -015, -017, 6.2-7.75 kg, fell in the turn after the pick;
         with the lean in place all three place their box)."""
         out = np.zeros((len(t), 2))
-        for h, t0, t1 in self._pre_lean_windows:
+        for h, t0, t1, p_o in self._pre_lean_windows:
             inside = (t >= t0) & (t < h.lift + LOAD_RAMP)
             if not inside.any():
                 continue
-            p_o = self._planned_object_positions(np.array([h.lift + 1e-3]))[0, :2]
             s = (h.mass / (self.mass + h.mass)) * (p_o[None, :] - p_com[:, :2])
             size = np.linalg.norm(s, axis=1)
             x = np.minimum(self._lean_share(size, np.zeros(len(t))) * size, h.pre_lean)
