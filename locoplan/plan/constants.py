@@ -214,12 +214,16 @@ HAND_ACCEL_LIMIT: Final = 9.0
 ARM_MOVING_MASS: Final = 1.0
 # Except for a heavy object, whose weight alone, m_o g times how far ahead it was picked, would
 # take more than PULL_FAST_SHARE of the weakest leg joint's torque limit about the stance hip
-# in single support: it comes the whole way in during the raise when the robot stands on both
-# feet meanwhile (the two hips share the pull's reaction), so that it is in before the first
-# step. Why: pulled in no faster than `pull_accel`, 6.2-7.8 kg boxes were still 0.25-0.33 m
-# ahead in the first single support of the turn that followed and the stance hip pitch
-# saturated (envelope seed 8080: 5 walk-carries fell that the fast pull carried); a 3.7 kg box
-# pulled in fast drew the trunk after it and fell in the turn (transfer-001), slowly it did not.
+# in single support: it comes the whole way in before the first step when the robot stands on
+# both feet from the lift-off to then (the two hips share the pull's reaction), at the gentlest
+# acceleration that allows (`manipulation._Builder._heavy_pull_accel`; the whole pull in the
+# raise alone when nothing gentler ends by that step). Why: pulled in no faster than
+# `pull_accel`, 6.2-7.8 kg boxes were still 0.25-0.33 m ahead in the first single support of the
+# turn that followed and the stance hip pitch saturated (envelope seed 8080: 5 walk-carries fell
+# that the fast pull carried); a 3.7 kg box pulled in fast drew the trunk after it and fell in
+# the turn (transfer-001), slowly it did not; pulled in during the raise alone although the
+# robot stood 0.5 s longer, 5-7 kg boxes drew the trunk 10 cm forward (seed 24681: the gentlest
+# pull that ends by the first step took 12 -> 7 of its 180 transfer and walk-carry failures).
 PULL_FAST_SHARE: Final = 0.5
 # Time (s) to raise a tucked hand to the height of its reach target before reaching out.
 TUCK_LIFT_DURATION: Final = 0.3

@@ -379,22 +379,26 @@ class _Builder:
         # by `pull` (m, along the approach) as it goes up, no faster than `pull_accel` for its
         # mass, and the rest of the way (to `x_in`, m ahead of the trunk) in the carry move
         # (`_carry_move`: up and in at once, past the pick's end if it needs the time);
-        # a heavy object (PULL_FAST_SHARE) comes the whole way during the raise if the robot
-        # stands on both feet meanwhile (constants' ARM_MOVING_MASS).
+        # a heavy object (PULL_FAST_SHARE) comes the whole way in before the first step if
+        # the robot stands on both feet during the raise (`_heavy_pull_accel`).
         pull = 0.0
         x_in = forward
         accel = pull_accel(obj.mass)
+        raise_accel = accel
         if moving:
             target = carry_in(support_half_width(obj, oyaw, ax, ay))
             if target < forward:
                 ahead = world_to_trunk(self.trunk, t_raise, (ox, oy, oz))[0]
                 pull = max(0.0, ahead - target)
                 heavy = obj.mass * GRAVITY * ahead > k.PULL_FAST_SHARE * self.leg_torque
-                if not heavy or self.steps_during(t_lift, t_raise):
-                    pull = min(pull, rest_to_rest_distance(t_raise - t_lift, accel))
+                if heavy and not self.steps_during(t_lift, t_raise):
+                    rise = self._carry_height(task, obj, target, gz + phases.raise_height, lift)
+                    rise -= gz + phases.raise_height - self.trunk.height
+                    raise_accel, accel = self._heavy_pull_accel(
+                        task, t_lift, t_raise, pull, rise, accel
+                    )
+                pull = min(pull, rest_to_rest_distance(t_raise - t_lift, raise_accel))
                 forward, x_in = max(target, ahead - pull), target
-        half_z = half_extents(obj)[2]
-        swept_top = self.carry_top(task, obj, forward)
         # Then, for an object held standing, while the hands have nothing else to do, it comes
         # in to CARRY_FORWARD slowly enough not to set it swinging.
         t_settle = self.next_use(task)
@@ -404,14 +408,7 @@ class _Builder:
             touch = beside((ox, oy, gz), side * (half + k.HAND_RADIUS), lx, ly)
             grip = beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
             raised = (grip[0] - pull * ax, grip[1] - pull * ay, gz + phases.raise_height)
-            # Carried no lower than it was raised: a box picked from a table higher than the
-            # carry pose would otherwise be lowered back towards that table's top while the
-            # robot turns or walks away from it (its corner caught the table's edge).
-            carry_z = max(
-                k.CARRY_HEIGHT + lift,
-                raised[2] - self.trunk.height,
-                swept_top + carry_clearance(obj.mass) + half_z + lift - self.trunk.height,
-            )
+            carry_z = self._carry_height(task, obj, forward, raised[2], lift)
             carry = (forward, side * (half - k.GRASP_SQUEEZE), carry_z)
             w_pre = HandWaypoint(pre, "world")
             w_touch = HandWaypoint(touch, "world")
@@ -462,6 +459,67 @@ class _Builder:
         )
         self.events.append(PlanEvent(t_contact, "grasp", task.index, name))
         self.events.append(PlanEvent(t_lift, "lift", task.index, name))
+
+    def _carry_height(
+        self, task: PlannedTask, obj: ObjectSpec, forward: float, raised_z: float, lift: float
+    ) -> float:
+        """Height (m, in trunk) of the grip points in the carry pose of the object `task`
+        picks, carried `forward` (m ahead of the trunk) after a raise to `raised_z` (world, m),
+        gripped `lift` above its centre: at least CARRY_HEIGHT, no lower than it was raised
+        (a box picked from a table higher than the carry pose would otherwise be lowered back
+        towards that table's top while the robot turns or walks away from it: its corner
+        caught the table's edge), and `carry_clearance` above every fixture it sweeps over."""
+        swept_top = self.carry_top(task, obj, forward)
+        return max(
+            k.CARRY_HEIGHT + lift,
+            raised_z - self.trunk.height,
+            swept_top + carry_clearance(obj.mass) + half_extents(obj)[2] + lift - self.trunk.height,
+        )
+
+    def _heavy_pull_accel(
+        self,
+        task: PlannedTask,
+        t_lift: float,
+        t_raise: float,
+        pull: float,
+        rise: float,
+        gentlest: float,
+    ) -> tuple[float, float]:
+        """Peak accelerations (m/s^2) of the raise and of the carry move of a heavy object
+        (PULL_FAST_SHARE) that the robot lifts standing on both feet: the gentlest, down to
+        `gentlest` (its `pull_accel`), with which the raise (pulling in as it goes up) and
+        the carry move (the rest of the `pull`, m, and `rise`, m up to the carry height) are
+        done before the first step after the lift-off (and before the hands' next task); if
+        none is, the whole pull during the raise, as fast as that takes, and the carry move
+        (up only) at `gentlest`.
+
+        Why: a heavy object still far ahead in the first single support saturates the stance
+        hip pitch (constants' PULL_FAST_SHARE), so it must be in before the robot steps; but
+        pulled in during the raise alone, 0.2-0.35 s, a 5 kg box came 13 cm in at 7 m/s^2
+        (40 N on the hands, about twice what the line feet answer at that height): the trunk
+        lurched 10 cm towards it, the CoM passed the toes, the MPC's forces fell to their
+        minimum and the trunk sank 12 cm with the box put back on its table (envelope seed
+        24681, transfer-009, which then had 0.56 s standing before its next turn)."""
+        t_raise_len = t_raise - t_lift
+        fast = pull / rest_to_rest_distance(t_raise_len, 1.0) if t_raise_len > 0.0 else gentlest
+        if fast <= gentlest:
+            return gentlest, gentlest
+        t_step = min((a for a, b in self.swings if b > t_lift), default=math.inf)
+        t_by = min(t_step, max(task.end, self.next_use(task)))
+
+        def done(a: float) -> float:
+            rest = pull - min(pull, rest_to_rest_distance(t_raise_len, a))
+            return t_raise + rest_to_rest_duration(math.hypot(rest, max(rise, 0.0)), a)
+
+        if done(gentlest) <= t_by:
+            return gentlest, gentlest
+        if done(fast) > t_by:
+            return fast, gentlest
+        lo, hi = gentlest, fast
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (lo, mid) if done(mid) <= t_by else (mid, hi)
+        return hi, hi
 
     def _carry_move(
         self,
