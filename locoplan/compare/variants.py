@@ -10,8 +10,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from locoplan.plan import Plan, compile_plan
+from locoplan.plan import Plan
+from locoplan.robot.description import load_robot_description
 from locoplan.scenario import Scenario
+from locoplan.sim.robot_plan import compile_robot_plan
 
 CompareKind = Literal["strategies", "models"]
 MODELS = ("external-force", "combined")
@@ -75,5 +77,7 @@ def schedules_identical(a: Plan, b: Plan) -> bool:
 
 
 def compile_variant_plans(scenario: Scenario, variants: tuple[Variant, ...]) -> tuple[Plan, ...]:
-    """Compile each variant's plan (raises PlanError: bad input, before anything runs)."""
-    return tuple(compile_plan(scenario, v.strategy) for v in variants)
+    """Compile each variant's plan for the script's robot (raises PlanError: bad input,
+    before anything runs)."""
+    desc = load_robot_description(scenario.robot)
+    return tuple(compile_robot_plan(scenario, v.strategy, desc) for v in variants)
