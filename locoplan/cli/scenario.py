@@ -36,7 +36,7 @@ def validate_command(
 
       cat my-task.yaml | locoplan validate -
     """
-    from locoplan.exceptions import RobotDescriptionError, ScenarioError
+    from locoplan.exceptions import ScenarioError
     from locoplan.plan import PlanError
     from locoplan.plan.errors import InfeasiblePlanError, plan_error_message
     from locoplan.scenario import load_scenario_file
@@ -67,10 +67,6 @@ def validate_command(
             continue
         try:
             compile_robot_plan(loaded.scenario)
-        except RobotDescriptionError as exc:
-            all_ok = False
-            out.print(f"{name}: {exc}", markup=False, emoji=False, highlight=False)
-            continue
         except InfeasiblePlanError as exc:
             all_ok = False
             message = plan_error_message(exc, name, loaded.text)

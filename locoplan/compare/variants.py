@@ -11,7 +11,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 from locoplan.plan import Plan
-from locoplan.robot.description import load_robot_description
 from locoplan.scenario import Scenario
 from locoplan.sim.robot_plan import compile_robot_plan
 
@@ -79,5 +78,4 @@ def schedules_identical(a: Plan, b: Plan) -> bool:
 def compile_variant_plans(scenario: Scenario, variants: tuple[Variant, ...]) -> tuple[Plan, ...]:
     """Compile each variant's plan for the script's robot (raises PlanError: bad input,
     before anything runs)."""
-    desc = load_robot_description(scenario.robot)
-    return tuple(compile_robot_plan(scenario, v.strategy, desc) for v in variants)
+    return tuple(compile_robot_plan(scenario, v.strategy) for v in variants)

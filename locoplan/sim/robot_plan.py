@@ -9,7 +9,8 @@ takes them from the robot's description (robot.yaml `nominal.trunk_height` and
 
 from __future__ import annotations
 
-from locoplan.plan import Plan, compile_plan
+from locoplan.exceptions import RobotDescriptionError
+from locoplan.plan import Plan, PlanError, compile_plan
 from locoplan.robot.description import RobotDescription, load_robot_description
 from locoplan.scenario import Scenario
 
@@ -19,8 +20,14 @@ def compile_robot_plan(
 ) -> Plan:
     """`compile_plan(scenario, strategy)` at the robot's nominal trunk height and foothold
     spacing; `desc` is the script's robot (loaded when not given). Raises what
-    `compile_plan` raises, and `RobotDescriptionError` for a robot that does not load."""
-    desc = desc if desc is not None else load_robot_description(scenario.robot)
+    `compile_plan` raises, and `PlanError` located at `robot` for a robot whose description
+    does not load (as the plan's payload checks do: `validate` passes such a script, `plan`
+    and `run` refuse it with the loader's message)."""
+    if desc is None:
+        try:
+            desc = load_robot_description(scenario.robot)
+        except RobotDescriptionError as exc:
+            raise PlanError(f"cannot plan for the robot: {exc}", loc=("robot",)) from exc
     return compile_plan(
         scenario, strategy, base_height=desc.base_height_nominal, foot_width=desc.stance_width
     )

@@ -365,9 +365,9 @@ def run_scenario(
         from locoplan.scenario.timing import scale_timing
 
         scenario = scale_timing(scenario, options.duration_scale)
-    desc = load_robot_description(scenario.robot)
-    plan = compile_robot_plan(scenario, options.strategy, desc)
+    plan = compile_robot_plan(scenario, options.strategy)
     interrupt.check()
+    desc = load_robot_description(scenario.robot)
     scene = scene_for(scenario, desc)
     settings = controller_settings(scenario, options, desc)
     interrupt.check()
