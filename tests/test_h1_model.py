@@ -1,9 +1,10 @@
 """Unitree H1 description (robots/h1/): MuJoCo and pinocchio agree on it, and it stands.
 
 The files are loaded directly (`mujoco.MjModel.from_xml_path`, `pin.buildModelFromMJCF`,
-the YAML with ruamel): locoplan's loader does not accept H1 yet (its `legs` + `arms` must
-cover every joint, and H1 has a torso yaw), so this test does the loader's cross-checks
-itself and uses only the pure convention maps of `locoplan.robot.conventions`.
+the YAML with ruamel), independently of locoplan's loader (written while the loader refused
+H1's torso yaw; tests/test_robot_description.py checks what the loader builds now): this
+test does the loader's cross-checks itself and uses only the pure convention maps of
+`locoplan.robot.conventions`.
 
 Free-flyer conventions as in tests/test_robot_dynamics.py: MuJoCo's qvel holds the pelvis'
 linear velocity in WORLD axes, pinocchio's v in PELVIS axes; with

@@ -237,8 +237,9 @@ def test_the_compile_time_check_takes_milliseconds(model: StaticModel) -> None:
 
 
 def _h1_description() -> RobotDescription:
-    """H1 as the loader would build it once it accepts `torso` joints (docs/robots.md: today
-    it refuses them): from robots/h1/robot.yaml and the MJCF, no HECTOR figure."""
+    """H1 built field by field from robots/h1/robot.yaml and the MJCF, no HECTOR figure
+    (written while the loader refused `torso` joints; it takes them now, and
+    tests/test_robot_description.py checks what it builds)."""
     path = ROBOTS / "h1" / "robot.yaml"
     raw = YAML(typ="safe").load(path.read_text())
     names = tuple(j["name"] for j in raw["joints"])

@@ -200,3 +200,73 @@ def test_unreadable_yaml_and_missing_key(tmp_path: Path) -> None:
         load_robot_description(str(_write(tmp_path, raw)))
     with pytest.raises(RobotDescriptionError, match="no robot description"):
         load_robot_description(str(tmp_path / "absent.yaml"))
+
+
+# -- a second robot: H1 (torso joint, 4-DoF arms, the optional fields) -------------------------
+H1_DIR = robots_dir() / "h1"
+
+
+def _raw_h1() -> dict:
+    raw = YAML(typ="safe").load((H1_DIR / "robot.yaml").read_text())
+    raw["mjcf"] = str((H1_DIR / "h1.xml").resolve())
+    return dict(raw)
+
+
+def test_h1_loads_with_torso_and_four_joint_arms() -> None:
+    h1 = load_robot_description("h1")
+    assert h1.n_joints == 19 and h1.trunk_body == "pelvis"
+    assert [list(i) for i in h1.leg_joint_indices] == [[0, 1, 2, 3, 4], [5, 6, 7, 8, 9]]
+    assert [list(i) for i in h1.arm_joint_indices] == [[11, 12, 13, 14], [15, 16, 17, 18]]
+    assert list(h1.torso_joint_indices) == [h1.joint_names.index("torso_yaw")] == [10]
+    assert (h1.hand_radius, h1.foot_sphere_radius) == (0.033, 0.014)
+    assert h1.stance_width == 0.40572
+    assert h1.reach is not None
+    assert h1.reach.shoulder_bodies == ("L_shoulder_roll_link", "R_shoulder_roll_link")
+    assert (h1.reach.max, h1.reach.nominal) == (0.613, 0.458)
+    # 1e-9 kg: a sum of decimal link masses (robots/h1/README.md).
+    assert abs(h1.total_mass - 51.437) < 1e-9
+    with pytest.raises(ValueError):
+        h1.torso_joint_indices[0] = 3
+
+
+def test_optional_fields_default_to_hector(desc: RobotDescription) -> None:
+    """HECTOR's robot.yaml has none of the optional fields: its contact geoms' radii
+    (hector.xml) and the planner's 0.2 m foothold spacing, no torso joint, no stated reach."""
+    assert len(desc.torso_joint_indices) == 0
+    assert (desc.hand_radius, desc.foot_sphere_radius, desc.stance_width) == (0.02, 0.01, 0.2)
+    assert desc.reach is None
+
+
+def _drop_torso(raw: dict) -> None:
+    del raw["torso"]
+
+
+def _torso_twice(raw: dict) -> None:
+    raw["torso"] = ["torso_yaw", "L_elbow"]
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (_drop_torso, r"must list every joint exactly once \(not listed: \['torso_yaw'\]\)"),
+        (_torso_twice, r"listed more than once: \['L_elbow'\]"),
+        (_set(["torso"], ["waist"]), r"torso: unknown joints \['waist'\]"),
+        (_set(["contacts", "hand_radius"], 0.0), "'hand_radius' must be positive"),
+        (_set(["reach", "nominal"], 0.7), "nominal 0.7 must not exceed max 0.613"),
+        (_set(["reach", "shoulders", "L"], "L_clavicle"), "shoulder body 'L_clavicle' missing"),
+        (_set(["stance_width"], "wide"), "'stance_width' must be a finite number"),
+    ],
+)
+def test_bad_h1_files_raise(tmp_path: Path, edit, message: str) -> None:
+    raw = _raw_h1()
+    edit(raw)
+    path = _write(tmp_path, raw)
+    with pytest.raises(RobotDescriptionError, match=message):
+        load_robot_description(str(path))
+
+
+def test_hector_missing_a_joint_is_refused(tmp_path: Path) -> None:
+    raw = _raw()
+    raw["arms"]["R"] = ["R_shoulder_roll", "R_shoulder_pitch"]
+    with pytest.raises(RobotDescriptionError, match=r"not listed: \['R_elbow'\]"):
+        load_robot_description(str(_write(tmp_path, raw)))

@@ -234,3 +234,17 @@ def test_a_relative_robot_path_is_resolved_beside_the_script(
     assert Path(loaded.scenario.robot).is_absolute()
     monkeypatch.chdir(tmp_path)
     assert load_robot_description(loaded.scenario.robot).name == "hector"
+
+
+def test_the_built_in_robot_h1_is_accepted(tmp_path: Path) -> None:
+    # `robot: h1` names the robot directory robots/h1/ (a built-in name, kept as written).
+    from locoplan.robot.description import load_robot_description
+
+    script = tmp_path / "h1-stand.yaml"
+    script.write_text(
+        "version: 1\nname: h1-stand\nrobot: h1\n"
+        "tasks:\n  - {action: stand, start: 0, duration: 1}\n"
+    )
+    loaded = load_scenario_file(script)
+    assert loaded.scenario.robot == "h1" and loaded.robot_path is None
+    assert load_robot_description(loaded.scenario.robot).name == "h1"

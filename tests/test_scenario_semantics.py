@@ -196,6 +196,7 @@ def test_robot_names_and_paths(tmp_path: Path) -> None:
     [(loc, message)] = issues(s)
     assert loc == ("robot",) and message.startswith("unknown robot 'atlas'; allowed: hector")
     assert issues(scenario(stand(0, 1), robot="hectr"))[0][1].endswith("(did you mean 'hector'?)")
+    assert issues(scenario(stand(0, 1), robot="h1")) == []
     (tmp_path / "robots").mkdir()
     (tmp_path / "robots" / "mine.yaml").write_text("name: mine\n")
     assert issues(scenario(stand(0, 1), robot="robots/mine.yaml"), base_dir=tmp_path) == []

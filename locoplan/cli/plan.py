@@ -59,19 +59,20 @@ def plan_command(
     import json
     from pathlib import Path
 
-    from locoplan.plan import STRATEGIES, PlanError, compile_plan
+    from locoplan.plan import STRATEGIES, PlanError
     from locoplan.plan.errors import plan_error_message
     from locoplan.plan.payload import payload_margins
     from locoplan.report.payload_table import payload_table
     from locoplan.report.plan_table import plan_table
     from locoplan.scenario.model import Scenario
+    from locoplan.sim.robot_plan import compile_robot_plan
 
     if strategy is not None and strategy not in STRATEGIES:
         _fail(EXIT_BAD_INPUT, f"unknown --strategy '{strategy}'; allowed: {', '.join(STRATEGIES)}")
     scenario, text = _load_with_text_or_exit(file)
     assert isinstance(scenario, Scenario)
     try:
-        plan = compile_plan(scenario, strategy)
+        plan = compile_robot_plan(scenario, strategy)
         margins = payload_margins(plan, scenario.robot)
     except PlanError as exc:
         _fail(EXIT_BAD_INPUT, plan_error_message(exc, file, text))

@@ -37,11 +37,12 @@ def validate_command(
       cat my-task.yaml | locoplan validate -
     """
     from locoplan.exceptions import ScenarioError
-    from locoplan.plan import PlanError, compile_plan
+    from locoplan.plan import PlanError
     from locoplan.plan.errors import InfeasiblePlanError, plan_error_message
     from locoplan.scenario import load_scenario_file
     from locoplan.scenario.limits import sim_time_issue
     from locoplan.scenario.source import MAX_BYTES
+    from locoplan.sim.robot_plan import compile_robot_plan
 
     stdin_data: bytes | str | None = None
     all_ok = True
@@ -65,7 +66,7 @@ def validate_command(
             out.print(str(too_long), markup=False, emoji=False, highlight=False)
             continue
         try:
-            compile_plan(loaded.scenario)
+            compile_robot_plan(loaded.scenario)
         except InfeasiblePlanError as exc:
             all_ok = False
             message = plan_error_message(exc, name, loaded.text)

@@ -10,8 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from locoplan.plan import Plan, compile_plan
+from locoplan.plan import Plan
 from locoplan.scenario import Scenario
+from locoplan.sim.robot_plan import compile_robot_plan
 
 CompareKind = Literal["strategies", "models"]
 MODELS = ("external-force", "combined")
@@ -75,5 +76,6 @@ def schedules_identical(a: Plan, b: Plan) -> bool:
 
 
 def compile_variant_plans(scenario: Scenario, variants: tuple[Variant, ...]) -> tuple[Plan, ...]:
-    """Compile each variant's plan (raises PlanError: bad input, before anything runs)."""
-    return tuple(compile_plan(scenario, v.strategy) for v in variants)
+    """Compile each variant's plan for the script's robot (raises PlanError: bad input,
+    before anything runs)."""
+    return tuple(compile_robot_plan(scenario, v.strategy) for v in variants)

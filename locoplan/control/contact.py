@@ -11,12 +11,30 @@ My' = -x_cop Fz about the sole point, so x_cop in [-heel, toe] is -toe Fz <= My'
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
 FloatArray = npt.NDArray[np.float64]
+
+
+# HECTOR's bound on a stance foot's normal force and the mass it was set for (N, kg): 250 N
+# is 1.5 of its 17 kg weight, i.e. single support with 0.5 g of vertical acceleration or load
+# to spare. Another robot gets the same multiple of its own weight (`foot_force_max`).
+F_MAX_REFERENCE = 250.0  # N
+F_MAX_REFERENCE_MASS = 17.0  # kg
+
+
+def foot_force_max(mass: float) -> float:
+    """The normal-force bound per stance foot (N) for a robot of `mass` (kg): HECTOR's 250 N
+    scaled by the mass ratio (1.5 of the weight). Rounded to 1 mN, far below what the QPs
+    resolve, so that a sum of decimal link masses (HECTOR's 17 kg comes out 4e-15 kg over)
+    gives HECTOR's 250 N exactly. H1 (51.437 kg): 756.4 N."""
+    if not (mass > 0.0 and math.isfinite(mass)):
+        raise ValueError(f"mass must be a positive number of kg, got {mass}")
+    return round(F_MAX_REFERENCE * mass / F_MAX_REFERENCE_MASS, 3)
 
 
 @dataclass(frozen=True, slots=True)

@@ -13,9 +13,10 @@ the update rate on this robot (shared/controller-notes.md); 10 ms with the horiz
 
 Torque mapping, selectable:
 - "wbc" (default): Kim et al.'s prioritised task accelerations (contacts, trunk orientation,
-  trunk position, swing feet and hands) followed by the paper's WBC QP (locoplan.control.wbc).
+  trunk position, swing feet and hands, then a joint posture for the redundant joints, see
+  `posture_joint_indices`) followed by the paper's WBC QP (locoplan.control.wbc).
 - "jacobian": the plain baseline, tau = h - J_c' W for stance legs and tau = h + J' F_PD for
-  swing legs and arms.
+  swing legs and arms, plus a joint PD on the redundant joints.
 
 The controller never imports mujoco: it sees pinocchio-convention states only.
 """
@@ -101,6 +102,15 @@ FOOT_FIXTURE_CLEARANCE = 0.03
 # 65 deg/s) reach only briefly. Checked on envelope seeds 8080 and 9191 (README).
 HIP_YAW_MARGIN = math.radians(10.0)
 FEET = ("L", "R")
+# Task rows a limb's end carries: a line foot 5 (position, foot pitch and yaw; stance or
+# swing), a point hand 3 (position). A limb with more joints than that is redundant.
+FOOT_TASK_ROWS = 5
+HAND_TASK_ROWS = 3
+# Singular values of the stacked task rows below this fraction of the largest count as zero
+# when the posture task looks for their null space (`posture_in_null_space`): far above
+# round-off (1e-15), far below the weakest real task direction (at the start of a stand,
+# 0.068 of 3.0 on H1's 22 rows, 0.054 of 2.7 on HECTOR's).
+NULL_SPACE_RTOL = 1e-6
 OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
 
@@ -129,6 +139,69 @@ def rigid_pair_targets(targets: FloatArray, p_hands: FloatArray) -> FloatArray:
     return np.array([mid + half, mid - half])
 
 
+def posture_joint_indices(desc: RobotDescription) -> npt.NDArray[np.intp]:
+    """Joints (indices into `desc.joint_names`, sorted) that no task of the stack determines:
+    the torso joints (no task uses them alone) and every joint of a limb with more joints than
+    its end's task rows (FOOT_TASK_ROWS, HAND_TASK_ROWS). Empty for HECTOR (5-DoF legs, 3-DoF
+    arms); H1: the torso yaw and both 4-DoF arms.
+
+    Why the whole redundant limb rather than one chosen joint: the posture level is solved in
+    the null space of the hand task, so on a 4-DoF arm under a 3-D hand task it can only move
+    the one self-motion direction (the elbow circling the shoulder-hand line); which joint
+    that direction mostly moves depends on the pose, and a posture on all four leaves the
+    choice to the projection."""
+    groups = [np.asarray(desc.torso_joint_indices, dtype=np.intp)]
+    groups += [
+        np.asarray(i, dtype=np.intp) for i in desc.leg_joint_indices if len(i) > FOOT_TASK_ROWS
+    ]
+    groups += [
+        np.asarray(i, dtype=np.intp) for i in desc.arm_joint_indices if len(i) > HAND_TASK_ROWS
+    ]
+    return np.sort(np.concatenate(groups))
+
+
+def posture_acceleration(
+    cols: npt.NDArray[np.intp],
+    q_des: FloatArray,
+    q: FloatArray,
+    v: FloatArray,
+    kp: float,
+    kd: float,
+) -> FloatArray:
+    """The joint posture PD: kp (q_des - q_j) - kd qdot_j (k,), rad/s^2, for the joints at
+    velocity columns `cols` (k,) = j + 6, in pinocchio's q (joint j at q[7 + j]) and v (at
+    v[6 + j]); `q_des` (k,) rad."""
+    return kp * (q_des - q[cols + 1]) - kd * v[cols]
+
+
+def posture_in_null_space(
+    J_tasks: FloatArray, cols: npt.NDArray[np.intp], a_posture: FloatArray, qdd: FloatArray
+) -> FloatArray:
+    """The joint accelerations (nv,) to add to `qdd` (nv,) so that the joints at velocity
+    columns `cols` (k,) come as near as they can to `a_posture` (k,), rad/s^2, without
+    changing J_tasks qdd for any task row above (J_tasks (n, nv)): least squares over the
+    exact null space Z of J_tasks (right singular vectors of the singular values below
+    NULL_SPACE_RTOL of the largest), dqdd = Z (S Z)^+ (a_posture - S qdd), S selecting `cols`.
+
+    Why not one more level of `prioritized_rows`: its damped projections keep a fraction
+    damping / (sigma^2 + damping) of each direction the levels above constrain (about 20 %
+    of the weakest, sigma 0.07, of the contacts and trunk rows in double support), and a
+    level that mostly asks for what the levels above forbid (a posture pulling the arms back
+    while the hands move them) gets that leak amplified by up to 1 / (2 sqrt(damping)) = 16.
+    Measured on H1 with the posture as a fourth damped level: at the first tick (hands 0.17 m
+    from the plan's first target) it asked 1800 rad/s^2 of the knees and 300 m/s^2 of the
+    trunk, every joint saturated and the robot fell at 0.57 s. In the exact null space the
+    tasks above cannot feel it. (H1 in double support: 22 task rows over 25 columns, a 3-D
+    null space: the torso yaw and each arm's elbow circle.)"""
+    _, sv, Vt = np.linalg.svd(J_tasks)
+    rank = int(np.count_nonzero(sv > NULL_SPACE_RTOL * sv[0])) if len(sv) else 0
+    Z = Vt[rank:].T
+    if Z.shape[1] == 0:
+        return np.zeros_like(qdd)
+    y = np.linalg.lstsq(Z[cols], a_posture - qdd[cols], rcond=None)[0]
+    return np.asarray(Z.dot(y), dtype=np.float64)
+
+
 def wrap_angle(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
@@ -145,7 +218,12 @@ def rpy_from_matrix(R: FloatArray) -> tuple[float, float, float]:
 class ControllerSettings:
     """Gains and rates. Trunk gains are the paper's Kp = diag(200, 200, 500, 1000, 1500,
     1000), Kd = diag(20, 20, 30, 30, 30, 30) on x_c = [p_c; Theta] (position first, as the
-    paper defines x_c^des = [p_c^des; Theta^des])."""
+    paper defines x_c^des = [p_c^des; Theta^des]).
+
+    The posture gains (1/s^2, 1/s) hold the joints no task determines
+    (`posture_joint_indices`) at the nominal pose, as accelerations, so the same numbers
+    serve any robot's inertia: kp 100 is a 10 rad/s bandwidth, half the hands' (kp 400), and
+    kd = 2 sqrt(kp) damps it critically. HECTOR has no such joint and never uses them."""
 
     mpc_period: float = 0.01
     mapping: Literal["wbc", "jacobian"] = "wbc"
@@ -175,11 +253,13 @@ class ControllerSettings:
     hand_kd_acc: float = 40.0
     hand_kp_force: float = 300.0
     hand_kd_force: float = 20.0
+    posture_kp_acc: float = 100.0
+    posture_kd_acc: float = 20.0
 
 
 @dataclass(frozen=True, slots=True)
 class ControlOutput:
-    """Everything one tick decided: torques (16,) before the last-guard clip, the clipped
+    """Everything one tick decided: torques (n_joints,) before the last-guard clip, the clipped
     torques, how many joints were clipped, the applied contact wrenches (2, 6) world
     [F; M] at the soles (zero for swing feet), the stance flags, the swing and hand targets,
     and the latest MPC / WBC results (None when not run this tick)."""
@@ -256,9 +336,13 @@ class LocoManipulationController:
             for h in plan.holds
             if h.release_kind == "drop" and h.release_task in starts
         ]
-        # Joint columns in v (6 base columns first): legs then arms, in robot.yaml order.
-        self._cols_leg = [np.arange(6, 11), np.arange(11, 16)]
-        self._cols_arm = [np.arange(16, 19), np.arange(19, 22)]
+        # Joint columns in v (6 base columns first) of each leg and arm, in robot.yaml order,
+        # and of the joints the posture task holds (none on HECTOR).
+        self._cols_leg = [np.asarray(i, dtype=np.intp) + 6 for i in desc.leg_joint_indices]
+        self._cols_arm = [np.asarray(i, dtype=np.intp) + 6 for i in desc.arm_joint_indices]
+        posture = posture_joint_indices(desc)
+        self._cols_posture = posture + 6
+        self._q_posture = np.asarray(desc.q_joints_nominal, dtype=float)[posture]
         # Frames read every tick, in `step`'s order: feet, hands, trunk.
         self._frames = (*desc.foot_frames, *desc.hand_frames, desc.trunk_body)
         s = self.s
@@ -293,12 +377,12 @@ class LocoManipulationController:
     def _nominal_geometry(self) -> None:
         """CoM offset and foot offsets in the trunk's yaw frame at the nominal pose, and the
         MPC's body inertia (composite, about the CoM, trunk frame)."""
-        q0 = np.zeros(23)
+        r = self.robot
+        q0 = np.zeros(r.nq)
         q0[2] = self.desc.base_height_nominal
         q0[6] = 1.0
         q0[7:] = self.desc.q_joints_nominal
-        r = self.robot
-        r.update(q0, np.zeros(22))
+        r.update(q0, np.zeros(r.nv))
         base = q0[:3]
         self.com_offset = r.com_position - base  # trunk frame == world at yaw 0
         self.foot_offsets = np.array([r.frame_position(f) - base for f in self.desc.foot_frames])
@@ -936,7 +1020,8 @@ class LocoManipulationController:
     def step(
         self, t: float, q: FloatArray, v: FloatArray, hand_load: float | None = None
     ) -> ControlOutput:
-        """Torques (16,) for state (q (23,), v (22,), pinocchio convention) at time t (s);
+        """Torques (n,) for state (q (7 + n,), v (6 + n,), pinocchio convention) at time t (s)
+        for the robot's n joints;
         `hand_load` (N) is the measured vertical force the hands exert on what they hold
         (None: no sensor, the plan's load alone)."""
         t_dyn = time.perf_counter()
@@ -1075,6 +1160,8 @@ class LocoManipulationController:
                 hand_targets,
                 v_hand_des,
                 tau_ext,
+                q,
+                v,
             )
         else:
             p_des = np.asarray(ref.position, dtype=float).copy()
@@ -1105,6 +1192,17 @@ class LocoManipulationController:
                 hand_acc,
             )
             qdd_cmd = prioritized_rows(J_t, a_t - b_t, ends)
+            if len(self._cols_posture):
+                # Lowest priority: the posture of the joints no task above determines.
+                a_p = posture_acceleration(
+                    self._cols_posture,
+                    self._q_posture,
+                    q,
+                    v,
+                    self.s.posture_kp_acc,
+                    self.s.posture_kd_acc,
+                )
+                qdd_cmd = qdd_cmd + posture_in_null_space(J_t, self._cols_posture, a_p, qdd_cmd)
             idx = [k for k in range(2) if stance[k]]
             w5 = np.zeros(5 * len(idx))
             for i, k in enumerate(idx):
@@ -1120,7 +1218,7 @@ class LocoManipulationController:
             )
             tau = wbc_out.tau
         wbc_time = time.perf_counter() - t_w
-        # (np.minimum / np.maximum: np.clip costs several times more on 16 values.)
+        # (np.minimum / np.maximum: np.clip costs several times more on a few values.)
         tau_clipped = np.minimum(np.maximum(tau, self._neg_tau_limits), self.tau_limits)
         # A torque at its limit to rounding (a QP's active bound) is not a clip.
         n_clipped = int(np.count_nonzero(np.abs(tau) > self._clip_limits))
@@ -1180,11 +1278,15 @@ class LocoManipulationController:
         hand_des: FloatArray,
         hand_vel_des: FloatArray,
         tau_ext: FloatArray,
+        q: FloatArray,
+        v: FloatArray,
     ) -> FloatArray:
-        """Baseline: stance legs tau = h - J' W; swing legs and arms tau = h + J' F_PD.
-        Feet arrays are stacked per foot (J_feet (2, 6, nv), ...); swing_pva (n, 3, 3) and
-        swing_yaw (n,) hold the targets of the n swinging feet in foot order; J_hands
-        (2, 3, nv) are the hands' linear Jacobians."""
+        """Baseline: stance legs tau = h - J' W; swing legs and arms tau = h + J' F_PD; the
+        posture joints (`posture_joint_indices`) add M_jj times the posture acceleration
+        (their own inertia, the coupling ignored, as a baseline may). Feet arrays are stacked
+        per foot (J_feet (2, 6, nv), ...); swing_pva (n, 3, 3) and swing_yaw (n,) hold the
+        targets of the n swinging feet in foot order; J_hands (2, 3, nv) are the hands'
+        linear Jacobians; q (nq,), v (nv,) the state."""
         s = self.s
         h = self.robot.h - tau_ext
         tau_full = h.copy()
@@ -1208,4 +1310,10 @@ class LocoManipulationController:
                 hand_vel_des[k] - v_hands[k]
             )
             tau_full[cols] += J_hands[k][:, cols].T @ F
+        cols = self._cols_posture
+        if len(cols):
+            a_p = posture_acceleration(
+                cols, self._q_posture, q, v, s.posture_kp_acc, s.posture_kd_acc
+            )
+            tau_full[cols] += np.diag(self.robot.M)[cols] * a_p
         return tau_full[6:]

@@ -9,11 +9,12 @@ SVD at 1 kHz).
 Step 2 (the paper's WBC QP): relax the floating-base accelerations (delta_b, 6) and the MPC's
 contact wrenches (delta_w, 5 per stance foot in the foot's yaw frame) so that the six
 unactuated rows of M (qdd_cmd + [delta_b; 0]) + h = S' tau + J_c' W (u + delta_w) + tau_ext
-hold, with the contact constraints on u + delta_w and the torque limits on the 16 actuated
+hold, with the contact constraints on u + delta_w and the torque limits on the n actuated
 rows (linear in the same variables). Relaxing the base accelerations is cheap and the wrench
 relaxation is expensive, so the MPC's forces lead and the PD tasks shape the joint motion.
 All quantities in pinocchio's convention: v = [v_base (body frame), omega_base (body frame),
-qdot (16)], Jacobians LOCAL_WORLD_ALIGNED (see `locoplan.robot.pinocchio_model`).
+qdot (n)] for the robot's n joints (HECTOR 16, H1 19), Jacobians LOCAL_WORLD_ALIGNED (see
+`locoplan.robot.pinocchio_model`).
 
 How it is solved every tick (`WholeBodyQp.solve`): the six equalities fix delta_b given
 delta_w through the base block of M (symmetric positive definite), delta_b = c + K delta_w,
@@ -161,9 +162,9 @@ def wrench_world_to_w5(yaw: float, wrench_world: FloatArray) -> FloatArray:
 
 @dataclass(frozen=True, slots=True)
 class WbcOutput:
-    """Joint torques (16,), the applied contact wrenches w5 per stance foot, the base
+    """Joint torques (n,), the applied contact wrenches w5 per stance foot, the base
     acceleration relaxation (6,), QP status, build and solve times (s), and the joint
-    acceleration relaxation (16,) when the QP had to relax those too (status
+    acceleration relaxation (n,) when the QP had to relax those too (status
     "solved_relaxed_joints", see `WholeBodyQp.relaxed_problem`), else None."""
 
     tau: FloatArray

@@ -10,7 +10,7 @@ resulting `RobotDescription`; nothing else reads robot files.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +28,29 @@ SIDES = ("L", "R")
 # Tolerances of the YAML <-> MJCF cross-check: the YAML states angles to 1e-6 deg.
 _ANGLE_TOL = 1e-7  # rad
 _LENGTH_TOL = 1e-9  # m, N m
+# Defaults of the optional robot.yaml fields, HECTOR's figures (robots/hector/hector.xml: the
+# `*_hand_sphere` and `*_foot_*` contact geoms; locoplan.plan.compile_plan's foothold spacing),
+# so that a robot.yaml written before these fields existed describes HECTOR unchanged.
+DEFAULT_HAND_RADIUS = 0.02  # m
+DEFAULT_FOOT_SPHERE_RADIUS = 0.01  # m
+DEFAULT_STANCE_WIDTH = 0.2  # m
+
+
+def _empty_indices() -> NDArray[np.intp]:
+    out = np.zeros(0, dtype=np.intp)
+    out.flags.writeable = False
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class RobotReach:
+    """How far the arms reach (robot.yaml `reach`): the bodies whose origins are the shoulder
+    centres, ("L", "R"); the longest shoulder-centre-to-hand-site distance `max` (m) and that
+    distance in the nominal pose, `nominal` (m)."""
+
+    shoulder_bodies: tuple[str, str]
+    max: float
+    nominal: float
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -36,7 +59,11 @@ class RobotDescription:
 
     Joint arrays have shape (n_joints,) and follow `joint_names`, which is the MJCF tree
     order, the actuator order and pinocchio's joint order after the free flyer. Side-indexed
-    tuples are in ("L", "R") order. Arrays are read-only.
+    tuples are in ("L", "R") order. Arrays are read-only. The legs, the arms (any number of
+    joints each) and the torso (joints in no limb, possibly none) partition the joints.
+
+    The fields after `arm_joint_indices` are optional in robot.yaml; their defaults are
+    HECTOR's (DEFAULT_*), and `reach` is None when the file gives none.
     """
 
     name: str
@@ -59,6 +86,11 @@ class RobotDescription:
     total_mass: float  # kg, from the MJCF
     leg_joint_indices: tuple[NDArray[np.intp], NDArray[np.intp]]  # into joint_names, ("L","R")
     arm_joint_indices: tuple[NDArray[np.intp], NDArray[np.intp]]
+    torso_joint_indices: NDArray[np.intp] = field(default_factory=_empty_indices)
+    hand_radius: float = DEFAULT_HAND_RADIUS  # m, the hand contact sphere's radius
+    foot_sphere_radius: float = DEFAULT_FOOT_SPHERE_RADIUS  # m, the sole spheres' radius
+    stance_width: float = DEFAULT_STANCE_WIDTH  # m, lateral distance of the planned footholds
+    reach: RobotReach | None = None
 
     @property
     def n_joints(self) -> int:
@@ -136,13 +168,15 @@ def load_robot_description(name_or_path: str | Path = "hector") -> RobotDescript
 
     legs = tuple(_indices(reader, "legs", side, joint_names) for side in SIDES)
     arms = tuple(_indices(reader, "arms", side, joint_names) for side in SIDES)
-    limbs = np.sort(np.concatenate([*legs, *arms]))
-    if not np.array_equal(limbs, np.arange(len(joint_names))):
-        raise reader.error("legs and arms must list every joint exactly once")
+    torso = _empty_indices()
+    if "torso" in reader.node:
+        torso = _indices_of(reader, "torso", reader.get_list("torso"), joint_names)
+    _check_partition(reader, joint_names, [*legs, *arms, torso])
 
     contacts = reader.get_sub("contacts")
     feet, hands = contacts.get_sub("feet"), contacts.get_sub("hands")
     foot = reader.get_sub("foot")
+    reach = _reach(reader.get_sub("reach")) if "reach" in reader.node else None
     nominal = reader.get_sub("nominal")
     nominal_deg = nominal.get_sub("joints_deg")
     if set(nominal_deg.keys()) != set(joint_names):
@@ -173,6 +207,13 @@ def load_robot_description(name_or_path: str | Path = "hector") -> RobotDescript
         total_mass=0.0,
         leg_joint_indices=(legs[0], legs[1]),
         arm_joint_indices=(arms[0], arms[1]),
+        torso_joint_indices=torso,
+        hand_radius=contacts.get_positive_or("hand_radius", DEFAULT_HAND_RADIUS),
+        foot_sphere_radius=contacts.get_positive_or(
+            "foot_sphere_radius", DEFAULT_FOOT_SPHERE_RADIUS
+        ),
+        stance_width=reader.get_positive_or("stance_width", DEFAULT_STANCE_WIDTH),
+        reach=reach,
     )
     if np.any(desc.q_joints_nominal < desc.q_lower) or np.any(desc.q_joints_nominal > desc.q_upper):
         raise nominal_deg.error("nominal joint angles must lie within the joint ranges")
@@ -235,6 +276,9 @@ def _check_mjcf(desc: RobotDescription, yaml_path: Path) -> float:
     for site in (desc.imu_site, *desc.foot_frames, *desc.hand_frames):
         if not _has(model, mujoco.mjtObj.mjOBJ_SITE, site):
             raise RobotDescriptionError(f"{where}: site {site!r} missing")
+    for body in desc.reach.shoulder_bodies if desc.reach is not None else ():
+        if not _has(model, mujoco.mjtObj.mjOBJ_BODY, body):
+            raise RobotDescriptionError(f"{where}: reach shoulder body {body!r} missing")
 
     if not _has(model, mujoco.mjtObj.mjOBJ_KEY, desc.nominal_keyframe):
         raise RobotDescriptionError(f"{where}: keyframe {desc.nominal_keyframe!r} missing")
@@ -264,13 +308,46 @@ def _frozen(values: Any) -> NDArray[np.float64]:
 def _indices(
     reader: _Reader, key: str, side: str, joint_names: tuple[str, ...]
 ) -> NDArray[np.intp]:
-    names = reader.get_sub(key).get_list(side)
+    return _indices_of(reader, f"{key}.{side}", reader.get_sub(key).get_list(side), joint_names)
+
+
+def _indices_of(
+    reader: _Reader, where: str, names: list[Any], joint_names: tuple[str, ...]
+) -> NDArray[np.intp]:
     unknown = [n for n in names if n not in joint_names]
     if unknown:
-        raise reader.error(f"{key}.{side}: unknown joints {unknown}")
+        raise reader.error(f"{where}: unknown joints {unknown}")
     idx = np.array([joint_names.index(n) for n in names], dtype=np.intp)
     idx.flags.writeable = False
     return idx
+
+
+def _check_partition(
+    reader: _Reader, joint_names: tuple[str, ...], groups: list[NDArray[np.intp]]
+) -> None:
+    """Legs, arms and torso must list every joint exactly once; the error names the joints
+    listed nowhere and those listed twice."""
+    counts = np.bincount(np.concatenate(groups), minlength=len(joint_names))
+    missing = [joint_names[i] for i in np.flatnonzero(counts == 0)]
+    repeated = [joint_names[i] for i in np.flatnonzero(counts > 1)]
+    if missing or repeated:
+        parts = [f"not listed: {missing}"] if missing else []
+        parts += [f"listed more than once: {repeated}"] if repeated else []
+        raise reader.error(
+            "legs, arms and torso must list every joint exactly once (" + "; ".join(parts) + ")"
+        )
+
+
+def _reach(node: _Reader) -> RobotReach:
+    shoulders = node.get_sub("shoulders")
+    reach = RobotReach(
+        shoulder_bodies=(shoulders.get_str("L"), shoulders.get_str("R")),
+        max=node.get_positive("max"),
+        nominal=node.get_positive("nominal"),
+    )
+    if not reach.nominal <= reach.max:
+        raise node.error(f"nominal {reach.nominal} must not exceed max {reach.max}")
+    return reach
 
 
 class _Reader:
@@ -323,6 +400,10 @@ class _Reader:
         if value <= 0.0:
             raise self.error(f"{key!r} must be positive, got {value!r}")
         return value
+
+    def get_positive_or(self, key: str, default: float) -> float:
+        """`get_positive` for an optional key: `default` when absent."""
+        return self.get_positive(key) if key in self.node else default
 
     def get_pair(self, key: str) -> tuple[float, float]:
         value = self._get(key)

@@ -291,7 +291,9 @@ class Scenario(_Strict):
     description: str | None = Field(None, description="free text")
     robot: str = Field(
         "hector",
-        description="'hector', or a path to a robot file (.yaml or .xml) relative to the script",
+        description=(
+            "'hector' or 'h1', or a path to a robot file (.yaml or .xml) relative to the script"
+        ),
     )
     robot_start: RobotStart = RobotStart()
     strategy: Literal["dynamic", "quasi-static"] = Field(

@@ -12,7 +12,8 @@ into the document (the offending task, or the offending name inside it):
 - timing: two locomotion tasks (step, walk, turn) may not overlap; two manipulation tasks
   (pick, drop, throw) may not overlap either (a locoplan rule beyond format v1: the arms do
   one thing at a time); no task may end after `end`;
-- robot: `hector`, or a path ending in .yaml or .xml that exists (relative to the script).
+- robot: a built-in robot (`hector`, `h1`), or a path ending in .yaml or .xml that exists
+  (relative to the script).
 
 Touching intervals (one ends exactly when the next starts) do not overlap; times are compared
 with a tolerance of `TIME_EPS` so that decimal sums such as 0.1 + 0.2 do not count as overlaps.
@@ -37,7 +38,7 @@ from locoplan.scenario.model import (
 # rounding error of adding decimal times written with a few digits.
 TIME_EPS = 1e-9
 
-BUILTIN_ROBOTS = ("hector",)
+BUILTIN_ROBOTS = ("hector", "h1")
 ROBOT_FILE_SUFFIXES = (".yaml", ".xml")
 # Fixture kinds with a top surface that `drop onto` can place an object on.
 DROP_TARGET_KINDS = ("table", "platform", "conveyor")

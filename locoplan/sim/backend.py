@@ -1,7 +1,8 @@
 """MuJoCo backend: reset / step / state, in the upkie style (the controller never sees mujoco).
 
 The robot's free joint comes first in the scene (the robot spec is loaded before anything is
-added), so robot qpos is [0:23] and qvel [0:22]; object free joints follow. States handed to
+added), so robot qpos is [0:7 + n] and qvel [0:6 + n] for its n joints (HECTOR: [0:23] and
+[0:22]); object free joints follow. States handed to
 the controller are in pinocchio's convention (see `locoplan.robot.conventions`).
 """
 
@@ -20,9 +21,6 @@ from locoplan.robot.mujoco_model import joint_qpos_indices, joint_qvel_indices, 
 from locoplan.sim.scene import Scene
 
 FloatArray = npt.NDArray[np.float64]
-
-NQ_ROBOT = 23
-NV_ROBOT = 22
 
 
 # An explicit signature (any layout: MuJoCo's contact fields are strided views): compiled or
@@ -87,7 +85,7 @@ def _foot_forces(
 
 @dataclass(frozen=True, slots=True)
 class RobotState:
-    """Perfect state estimate at time `t` (s): q (23,) and v (22,) in pinocchio convention."""
+    """Perfect state estimate at time `t` (s): q (7 + n,) and v (6 + n,) in pinocchio convention."""
 
     t: float
     q: FloatArray
@@ -107,7 +105,9 @@ class MujocoBackend:
             int(m.site_bodyid[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, name)])
             for name in scene.robot.foot_frames
         ]
-        self._trunk_body_id = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "trunk")
+        self.nq_robot = 7 + scene.robot.n_joints  # the free joint, then one hinge per joint
+        self.nv_robot = 6 + scene.robot.n_joints
+        self._trunk_body_id = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, scene.robot.trunk_body)
         self._geom_body = np.asarray(m.geom_bodyid)
         self._foot_bodies = np.array(self._foot_body_ids, dtype=np.int32)
         self._pyramidal = int(m.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
@@ -127,7 +127,7 @@ class MujocoBackend:
         plan starts the hands tucked when the scene is close to the robot)."""
         mujoco.mj_resetData(self.model, self.data)
         q0 = nominal_qpos(self.scene.robot, self.model)
-        self.data.qpos[:NQ_ROBOT] = q0[:NQ_ROBOT]
+        self.data.qpos[: self.nq_robot] = q0[: self.nq_robot]
         self.data.qpos[0] = base_xy[0]
         self.data.qpos[1] = base_xy[1]
         self.data.qpos[3:7] = [math.cos(base_yaw / 2), 0.0, 0.0, math.sin(base_yaw / 2)]
@@ -169,7 +169,8 @@ class MujocoBackend:
                 mujoco.mj_forward(m, d)
 
     def step(self, tau: FloatArray) -> None:
-        """Apply `tau` (16,) through the torque actuators (the plant clips to ctrlrange)."""
+        """Apply `tau` (n_joints,) through the torque actuators (the plant clips to
+        ctrlrange)."""
         self.data.ctrl[:] = tau
         mujoco.mj_step(self.model, self.data)
 
@@ -187,9 +188,9 @@ class MujocoBackend:
         return RobotState(t=float(self.data.time), q=q, v=v)
 
     def robot_qv(self) -> tuple[FloatArray, FloatArray]:
-        """`robot_state`'s q (23,) and v (22,) alone (the closed loop's per-tick call)."""
+        """`robot_state`'s q (7 + n,) and v (6 + n,) alone (the closed loop's per-tick call)."""
         d = self.data
-        return mj_to_pin_state(d.qpos[:NQ_ROBOT], d.qvel[:NV_ROBOT])
+        return mj_to_pin_state(d.qpos[: self.nq_robot], d.qvel[: self.nv_robot])
 
     def applied_torques(self) -> FloatArray:
         """Torques the actuators actually applied at the last step (after ctrlrange), N m."""

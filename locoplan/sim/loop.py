@@ -59,8 +59,8 @@ class RunRecord:
     """What a run produced, sampled every RECORD_PERIOD (plus per-tick maxima).
 
     Per sample: time (s), trunk origin position (3,) and roll/pitch/yaw (rad) from MuJoCo's
-    free joint, each object's position (3,), the torques MuJoCo applied (16,) and the planned
-    stance flags (L, R)."""
+    free joint, each object's position (3,), the torques MuJoCo applied (n_joints,) and the
+    planned stance flags (L, R). The per-joint peaks are sized from `torque_limits`."""
 
     joint_names: tuple[str, ...]
     torque_limits: FloatArray
@@ -70,8 +70,8 @@ class RunRecord:
     object_positions: dict[str, list[FloatArray]] = field(default_factory=dict)
     joint_torque: list[FloatArray] = field(default_factory=list)
     stance: list[tuple[bool, bool]] = field(default_factory=list)
-    peak_abs_torque: FloatArray = field(default_factory=lambda: np.zeros(16))
-    peak_torque_time: FloatArray = field(default_factory=lambda: np.zeros(16))
+    peak_abs_torque: FloatArray = field(default_factory=lambda: np.zeros(0))
+    peak_torque_time: FloatArray = field(default_factory=lambda: np.zeros(0))
     mpc_times_s: list[float] = field(default_factory=list)
     wbc_times_s: list[float] = field(default_factory=list)
     tick_split_s: dict[str, float] = field(default_factory=dict)
@@ -91,6 +91,13 @@ class RunRecord:
     sim_time: float = 0.0
     wall_time: float = 0.0
     error: str | None = None
+
+    def __post_init__(self) -> None:
+        n = len(self.torque_limits)
+        if self.peak_abs_torque.shape != (n,):
+            self.peak_abs_torque = np.zeros(n)
+        if self.peak_torque_time.shape != (n,):
+            self.peak_torque_time = np.zeros(n)
 
 
 # Explicit signature (any layout): compiled or loaded from the cache at import.
@@ -274,7 +281,8 @@ class ClosedLoop:
         log.frame_transforms_arrays(
             t, "world", self._robot_body_names, xpos[ids], d.xquat[ids][:, _WXYZ_TO_XYZW]
         )
-        log.joint_states(t, self._joint_names, qpos[7:23], d.qvel[6:22], applied)
+        n = len(self._joint_names)
+        log.joint_states(t, self._joint_names, qpos[7 : 7 + n], d.qvel[6 : 6 + n], applied)
         log.json(
             "/robot/base",
             t,

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from locoplan import interrupt
-from locoplan.control.contact import ContactLimits
+from locoplan.control.contact import ContactLimits, foot_force_max
 from locoplan.control.controller import ControllerSettings
 from locoplan.control.mpc import MpcSettings
 from locoplan.exceptions import LocoplanError
@@ -34,12 +34,13 @@ from locoplan.metrics import (
     unwrap_yaw,
     yaw_difference_deg,
 )
-from locoplan.plan import Plan, compile_plan
+from locoplan.plan import Plan
 from locoplan.render.samples import RenderSample
 from locoplan.robot.description import RobotDescription, load_robot_description
 from locoplan.scenario import Scenario
 from locoplan.sim.live import LiveView, Pacer
 from locoplan.sim.loop import RECORD_PERIOD, ClosedLoop, Push, RunRecord
+from locoplan.sim.robot_plan import compile_robot_plan
 from locoplan.sim.scene import FixtureDef, ObjectDef, Scene, build_scene
 
 if TYPE_CHECKING:
@@ -302,9 +303,17 @@ def compute_metrics(
     return metrics
 
 
-def controller_settings(scenario: Scenario, options: RunOptions) -> ControllerSettings:
-    """Controller settings from the script (`mpc`, `model`) and the run options."""
-    limits = ContactLimits()
+def controller_settings(
+    scenario: Scenario, options: RunOptions, desc: RobotDescription | None = None
+) -> ControllerSettings:
+    """Controller settings from the script (`mpc`, `model`), the run options and the robot
+    (`desc`, else the script's): the feet's support segment (robot.yaml `foot`) bounds the
+    centre of pressure, and the normal-force bound per foot scales with the robot's mass
+    (`foot_force_max`; HECTOR's 250 N)."""
+    desc = desc if desc is not None else load_robot_description(scenario.robot)
+    limits = ContactLimits(
+        f_max=foot_force_max(desc.total_mass), toe=desc.foot_toe, heel=desc.foot_heel
+    )
     if options.f_min is not None:
         limits = replace(limits, f_min=options.f_min)
     mpc = MpcSettings(
@@ -312,6 +321,8 @@ def controller_settings(scenario: Scenario, options: RunOptions) -> ControllerSe
         horizon=scenario.mpc.horizon,
         f_min=limits.f_min,
         f_max=limits.f_max,
+        toe=limits.toe,
+        heel=limits.heel,
         mu_torsion=limits.mu_torsion,
         backend=options.qp_backend,
     )
@@ -354,11 +365,11 @@ def run_scenario(
         from locoplan.scenario.timing import scale_timing
 
         scenario = scale_timing(scenario, options.duration_scale)
-    plan = compile_plan(scenario, options.strategy)
+    plan = compile_robot_plan(scenario, options.strategy)
     interrupt.check()
     desc = load_robot_description(scenario.robot)
     scene = scene_for(scenario, desc)
-    settings = controller_settings(scenario, options)
+    settings = controller_settings(scenario, options, desc)
     interrupt.check()
     log_path: Path | None = None
     writer: RunLogWriter | None = None
