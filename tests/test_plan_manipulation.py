@@ -469,3 +469,35 @@ def test_a_short_drop_shares_its_window_between_hover_and_lowering() -> None:
     assert hold.release == pytest.approx(drop.end, abs=TIME_TOL)
     for t0, t1, _ in _lower_segments(plan):
         assert drop.start < t0 < t1 == pytest.approx(drop.end, abs=TIME_TOL)
+
+
+# A pick whose window the turn that follows starts in (0.5-1.5 s, turn from 1.4 s).
+OVERLAPPED_PICK = WALK_CARRY.replace("start: 1.6, duration: 1.6", "start: 1.4, duration: DUR")
+
+
+@pytest.mark.parametrize(
+    ("mass", "duration", "waits"),
+    [(7.0, 1.8, True), (2.0, 1.8, False), (7.0, 0.9, False)],
+)
+def test_a_turn_waits_for_the_end_of_a_heavy_pick_when_the_rate_allows(
+    mass: float, duration: float, waits: bool
+) -> None:
+    """7 kg 0.33 m ahead is heavy (m g d = 22.7 N m, over PULL_FAST_SHARE of the 33.5 N m
+    leg joints): the turn written from 1.4 s starts at the pick's end, 1.5 s, ends when
+    written, and the plan says so; its first step comes after the pick. A 2 kg box does not
+    wait (the dynamic strategy overlaps the tasks as written), nor does a turn that would
+    then be quicker than HURRIED_LOADED_TURN_RATE on average (90 deg in 0.8 s)."""
+    text = OVERLAPPED_PICK.replace("MASS", str(mass)).replace("DUR", str(duration))
+    text = text.replace("start: 3.2, duration: 2.4", "start: 3.4, duration: 2.2")
+    plan = compile_plan(scenario_from_text(text))
+    pick, turn = plan.tasks[0], plan.tasks[1]
+    assert turn.end == pytest.approx(1.4 + duration)
+    first_swing = min(a for f in range(2) for a, _ in plan.swing_intervals(f))
+    if waits:
+        assert turn.start == pytest.approx(pick.end)
+        assert first_swing >= pick.end - 1e-9
+        assert any("starts at 1.50 s" in n and "'box'" in n for n in plan.notes)
+    else:
+        assert turn.start == pytest.approx(1.4)
+        assert first_swing < pick.end
+        assert not plan.notes
