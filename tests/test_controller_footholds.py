@@ -61,3 +61,25 @@ def test_turning_footholds_keep_the_hip_yaw_within_its_room() -> None:
     # the turn is fast enough that landing at the touchdown yaw would leave the range, and
     # its first and last stances are slow enough to land at the touchdown yaw
     assert max(sweeps) > math.radians(30.0) and min(sweeps) < room
+
+
+def test_a_measured_velocity_error_moves_the_foothold_by_half_the_stance_plus_k() -> None:
+    """The paper's foot placement p = p_c + v dt/2 + k (v - v_des) with the MEASURED CoM
+    velocity v in the neutral-point term: a sideways velocity error of 0.2 m/s (the CoM
+    falling towards the swing foot in an in-place turn) moves the foothold by (dt/2 + k) 0.2 m
+    that way, dt the coming stance (half the gait period) and k the Raibert gain, to 1e-9 m.
+    (With the reference's velocity in dt/2, as before, it moved by k 0.2 = 1 cm only, and
+    seed 31415's in-place turns walked off sideways.) Nothing else moves it: the same plan
+    point, the same yaw."""
+    plan = compile_plan(scenario_from_text(FAST_TURN))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    p_c = np.array([0.0, 0.0, ctl.com_height])
+    k, (t_td, _) = 0, plan.stance_intervals(0)[2]
+    base, yaw0 = ctl._foothold(k, t_td - 0.05, t_td, p_c, np.zeros(3))
+    moved, yaw1 = ctl._foothold(k, t_td - 0.05, t_td, p_c, np.array([0.0, 0.2, 0.0]))
+    dt = plan.gait_period_at(t_td) / 2.0
+    assert moved - base == pytest.approx(
+        [0.0, (dt / 2.0 + ctl.s.raibert_gain) * 0.2, 0.0], abs=1e-9
+    )
+    assert yaw1 == yaw0

@@ -481,7 +481,15 @@ class LocoManipulationController:
         # (placing them relative to the shifted CoM walked the robot backwards under a load).
         p = p_c + (p_ref[1] - p_ref[0]) + off
         p[:2] -= self._shift_now
-        p[:2] += v_ref[1, :2] * stance_time / 2.0 + self.s.raibert_gain * (v_c[:2] - v_ref[0, :2])
+        # The paper's rule: the measured CoM velocity's neutral point v_c dt/2, plus k times
+        # its error. Why measured (as the paper has it) and not the reference's velocity at
+        # touchdown, which this used before: a velocity error was then fed back through k =
+        # 0.05 alone, and a line foot cannot push the CoM sideways in single support; the
+        # first single support of an in-place turn with 0.23 s swings let the CoM fall 5 cm
+        # towards the swing foot, every foot after landed the nominal width from the moving
+        # CoM, and the robot walked off sideways at 0.15-0.2 m/s until it fell (envelope seed
+        # 31415, locomotion-013, -038, -039, both strategies; all six succeed with it).
+        p[:2] += v_c[:2] * stance_time / 2.0 + self.s.raibert_gain * (v_c[:2] - v_ref[0, :2])
         p[2] = 0.0
         if self.plan.footprints:
             self._off_footprints(p, yaw_td)
