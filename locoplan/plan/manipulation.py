@@ -402,13 +402,13 @@ class _Builder:
         # Then, for an object held standing, while the hands have nothing else to do, it comes
         # in to CARRY_FORWARD slowly enough not to set it swinging.
         t_settle = self.next_use(task)
+        carry_z = self._carry_height(task, obj, forward, gz + phases.raise_height, lift)
         for h in hands:
             side = SIDE[h]
             pre = beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
             touch = beside((ox, oy, gz), side * (half + k.HAND_RADIUS), lx, ly)
             grip = beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
             raised = (grip[0] - pull * ax, grip[1] - pull * ay, gz + phases.raise_height)
-            carry_z = self._carry_height(task, obj, forward, raised[2], lift)
             carry = (forward, side * (half - k.GRASP_SQUEEZE), carry_z)
             w_pre = HandWaypoint(pre, "world")
             w_touch = HandWaypoint(touch, "world")
