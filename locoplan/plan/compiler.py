@@ -276,13 +276,13 @@ def _wait_for_heavy_lifts(
     (and ending when written), and a note for each: what the quasi-static strategy does
     for every pick, the dynamic one for heavy picks only.
 
-    Heavy: the object's weight times how far ahead it is at the raise's end exceeds
-    PULL_FAST_SHARE of the weakest leg joint's torque limit: such an object comes the whole
-    way in during the raise when the robot stands on both feet meanwhile (constants'
-    PULL_FAST_SHARE), else it is still far ahead in the first single support and the stance
-    hip pitch saturates. That fast pull, and the lift, push the trunk forward by up to 10 cm
-    (far beyond what the line feet answer in single support), which the robot recovers
-    from standing on both feet until the pick's end. When the robot steps is the planner's
+    Heavy (`hand_paths.heavy_pull`): the object's weight times how far ahead it is at the
+    raise's end exceeds PULL_FAST_SHARE of the weakest leg joint's torque limit: such an
+    object must be in before the first step when the robot stands on both feet during the
+    raise (`manipulation._Builder._heavy_pull_accel`: at the gentlest acceleration that ends
+    the pull by then), else it is still far ahead in the first single support and the stance
+    hip pitch saturates. Standing until the pick's end gives that pull its time, and the
+    robot the time to recover from the lift. When the robot steps is the planner's
     to decide inside the written windows: the task keeps its end and its displacement, and
     starts later only if that leaves it no quicker than HURRIED_LOADED_TURN_RATE /
     HURRIED_LOADED_WALK_SPEED on average and within the gait's rate limits
@@ -297,9 +297,7 @@ def _wait_for_heavy_lifts(
     11235, 13579, 24681, 30103: 22 of 24 against 15; tuning seeds 26457, 22360, 17320: 11 of
     14 against 12). With the old fast pull (the whole pull in the raise) it was -2 on the
     seeds it was not found on, and it was not kept then."""
-    from locoplan.plan import constants as k
-    from locoplan.plan.geometry import GRAVITY
-    from locoplan.plan.hand_paths import world_to_trunk
+    from locoplan.plan.hand_paths import heavy_pull, world_to_trunk
     from locoplan.plan.profiles import peak_rate
     from locoplan.scenario.feasibility import ceil_time, turn_rate_limit, walk_speed_limit
 
@@ -324,7 +322,7 @@ def _wait_for_heavy_lifts(
         if raise_ is None or raise_.start.frame != "world":
             continue
         ahead = world_to_trunk(plan.trunk, raise_.t1, raise_.start.point)[0]
-        if hold.mass * GRAVITY * ahead <= k.PULL_FAST_SHARE * leg:
+        if not heavy_pull(hold.mass, ahead, leg):
             continue
         loco = next(
             (

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from locoplan.plan import constants as k
 from locoplan.plan.clearance import Clearance, Obstacle, track_clearance
-from locoplan.plan.geometry import half_extents
+from locoplan.plan.geometry import GRAVITY, half_extents
 from locoplan.plan.hands import HandSegment, HandWaypoint, Vec3, make_track
 from locoplan.plan.trunk import TrunkPath
 from locoplan.scenario.model import ObjectSpec
@@ -140,6 +140,13 @@ def pull_accel(mass: float) -> float:
     (`carry_in`): the arms and the object then push the trunk with (ARM_MOVING_MASS + mass) a,
     held to the force HAND_ACCEL_LIMIT gives the empty arms (constants' docstring)."""
     return k.HAND_ACCEL_LIMIT * k.ARM_MOVING_MASS / (k.ARM_MOVING_MASS + max(mass, 0.0))
+
+
+def heavy_pull(mass: float, ahead: float, leg_torque: float) -> bool:
+    """Whether an object of `mass` (kg) picked `ahead` (m ahead of the trunk) is heavy for
+    its pull-in: its weight times that distance exceeds PULL_FAST_SHARE of the weakest leg
+    joint's torque limit `leg_torque` (N m; constants' PULL_FAST_SHARE)."""
+    return mass * GRAVITY * ahead > k.PULL_FAST_SHARE * leg_torque
 
 
 def beside(p: Vec3, d: float, lx: float, ly: float) -> Vec3:

@@ -39,7 +39,6 @@ from locoplan.plan.clearance import Obstacle, fixture_obstacle, object_obstacle
 from locoplan.plan.errors import PlanError
 from locoplan.plan.events import PlanEvent
 from locoplan.plan.geometry import (
-    GRAVITY,
     approach_direction,
     ballistic_landing,
     half_extents,
@@ -57,6 +56,7 @@ from locoplan.plan.hand_paths import (
     clear_throw_line,
     default_waypoint,
     grip_height,
+    heavy_pull,
     initial_waypoint,
     pull_accel,
     rest_to_rest_distance,
@@ -383,6 +383,9 @@ class _Builder:
         # the robot stands on both feet during the raise (`_heavy_pull_accel`).
         pull = 0.0
         x_in = forward
+        # The next task that uses the hands (inf if none): the carry move, the heavy pull and
+        # the settling-in end by then.
+        t_settle = self.next_use(task)
         accel = pull_accel(obj.mass)
         raise_accel = accel
         if moving:
@@ -390,18 +393,17 @@ class _Builder:
             if target < forward:
                 ahead = world_to_trunk(self.trunk, t_raise, (ox, oy, oz))[0]
                 pull = max(0.0, ahead - target)
-                heavy = obj.mass * GRAVITY * ahead > k.PULL_FAST_SHARE * self.leg_torque
+                heavy = heavy_pull(obj.mass, ahead, self.leg_torque)
                 if heavy and not self.steps_during(t_lift, t_raise):
                     rise = self._carry_height(task, obj, target, gz + phases.raise_height, lift)
                     rise -= gz + phases.raise_height - self.trunk.height
                     raise_accel, accel = self._heavy_pull_accel(
-                        task, t_lift, t_raise, pull, rise, accel
+                        task, t_lift, t_raise, t_settle, pull, rise, accel
                     )
                 pull = min(pull, rest_to_rest_distance(t_raise - t_lift, raise_accel))
                 forward, x_in = max(target, ahead - pull), target
-        # Then, for an object held standing, while the hands have nothing else to do, it comes
-        # in to CARRY_FORWARD slowly enough not to set it swinging.
-        t_settle = self.next_use(task)
+        # Then, for an object held standing, while the hands have nothing else to do (until
+        # t_settle), it comes in to CARRY_FORWARD slowly enough not to set it swinging.
         carry_z = self._carry_height(task, obj, forward, gz + phases.raise_height, lift)
         for h in hands:
             side = SIDE[h]
@@ -481,6 +483,7 @@ class _Builder:
         task: PlannedTask,
         t_lift: float,
         t_raise: float,
+        t_next: float,
         pull: float,
         rise: float,
         gentlest: float,
@@ -489,7 +492,8 @@ class _Builder:
         (PULL_FAST_SHARE) that the robot lifts standing on both feet: the gentlest, down to
         `gentlest` (its `pull_accel`), with which the raise (pulling in as it goes up) and
         the carry move (the rest of the `pull`, m, and `rise`, m up to the carry height) are
-        done before the first step after the lift-off (and before the hands' next task); if
+        done before the first step after the lift-off (and before the hands' next task, at
+        `t_next` s, inf if none); if
         none is, the whole pull during the raise, as fast as that takes, and the carry move
         (up only) at `gentlest`.
 
@@ -505,7 +509,7 @@ class _Builder:
         if fast <= gentlest:
             return gentlest, gentlest
         t_step = min((a for a, b in self.swings if b > t_lift), default=math.inf)
-        t_by = min(t_step, max(task.end, self.next_use(task)))
+        t_by = min(t_step, max(task.end, t_next))
 
         def done(a: float) -> float:
             rest = pull - min(pull, rest_to_rest_distance(t_raise_len, a))
