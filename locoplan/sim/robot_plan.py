@@ -15,6 +15,15 @@ from locoplan.robot.description import RobotDescription, load_robot_description
 from locoplan.scenario import Scenario
 
 
+def plan_robot(scenario: Scenario) -> RobotDescription:
+    """The description of the script's robot; `PlanError` located at `robot` when it does not
+    load (what `compile_robot_plan` raises then)."""
+    try:
+        return load_robot_description(scenario.robot)
+    except RobotDescriptionError as exc:
+        raise PlanError(f"cannot plan for the robot: {exc}", loc=("robot",)) from exc
+
+
 def compile_robot_plan(
     scenario: Scenario, strategy: str | None = None, desc: RobotDescription | None = None
 ) -> Plan:
@@ -24,10 +33,7 @@ def compile_robot_plan(
     does not load (as the plan's payload checks do: `validate` passes such a script, `plan`
     and `run` refuse it with the loader's message)."""
     if desc is None:
-        try:
-            desc = load_robot_description(scenario.robot)
-        except RobotDescriptionError as exc:
-            raise PlanError(f"cannot plan for the robot: {exc}", loc=("robot",)) from exc
+        desc = plan_robot(scenario)
     return compile_plan(
         scenario, strategy, base_height=desc.base_height_nominal, foot_width=desc.stance_width
     )

@@ -40,7 +40,7 @@ from locoplan.robot.description import RobotDescription, load_robot_description
 from locoplan.scenario import Scenario
 from locoplan.sim.live import LiveView, Pacer
 from locoplan.sim.loop import RECORD_PERIOD, ClosedLoop, Push, RunRecord
-from locoplan.sim.robot_plan import compile_robot_plan
+from locoplan.sim.robot_plan import compile_robot_plan, plan_robot
 from locoplan.sim.scene import FixtureDef, ObjectDef, Scene, build_scene
 
 if TYPE_CHECKING:
@@ -365,9 +365,11 @@ def run_scenario(
         from locoplan.scenario.timing import scale_timing
 
         scenario = scale_timing(scenario, options.duration_scale)
-    plan = compile_robot_plan(scenario, options.strategy)
+    # The description is loaded once, for the plan and the rest (a plan error at `robot`
+    # when it does not load, as `compile_robot_plan` raises it).
+    desc = plan_robot(scenario)
+    plan = compile_robot_plan(scenario, options.strategy, desc)
     interrupt.check()
-    desc = load_robot_description(scenario.robot)
     scene = scene_for(scenario, desc)
     settings = controller_settings(scenario, options, desc)
     interrupt.check()
