@@ -21,8 +21,14 @@ def repo_scenario(name: str) -> Scenario:
 
 
 def scenario_files() -> list[Path]:
-    """Every scenario file shipped in scenarios/."""
+    """Every scenario file shipped in scenarios/ (HECTOR's and H1's)."""
     return sorted(SCENARIO_DIR.glob("*.yaml"))
+
+
+def hector_scenario_files() -> list[Path]:
+    """The scenario files of scenarios/ written for HECTOR (the default robot), for tests that
+    check a plan against HECTOR's own figures."""
+    return [p for p in scenario_files() if load_scenario(p).robot == "hector"]
 
 
 def hold_script(mass: float, robot: str | None = None) -> str:

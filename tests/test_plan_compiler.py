@@ -7,10 +7,11 @@ import math
 
 import numpy as np
 import pytest
-from plan_fixtures import repo_scenario, scenario_files
+from plan_fixtures import hector_scenario_files, repo_scenario, scenario_files
 
 from locoplan.plan import PlanError, compile_plan
 from locoplan.scenario import load_scenario
+from locoplan.sim.robot_plan import compile_robot_plan
 
 # Arm geometry of robots/hector (shared/robot.md): shoulders at (0, +-0.12, 0.17) in the
 # trunk frame, reach 0.455 m from the shoulder.
@@ -21,7 +22,7 @@ SHOULDER_Y, SHOULDER_Z, ARM_REACH = 0.12, 0.17, 0.455
 @pytest.mark.parametrize("strategy", ["dynamic", "quasi-static"])
 def test_every_scenario_compiles_and_exports(path, strategy) -> None:
     scenario = load_scenario(path)
-    plan = compile_plan(scenario, strategy)
+    plan = compile_robot_plan(scenario, strategy)
     assert plan.strategy == strategy
     assert plan.t_end >= max(t.end for t in plan.tasks)
     assert [e.t for e in plan.events] == sorted(e.t for e in plan.events)
@@ -39,7 +40,7 @@ def test_every_scenario_compiles_and_exports(path, strategy) -> None:
         assert plan.object_target(name).fixture == fixture
 
 
-@pytest.mark.parametrize("path", scenario_files(), ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", hector_scenario_files(), ids=lambda p: p.stem)
 def test_scenario_hand_targets_within_reach(path) -> None:
     plan = compile_plan(load_scenario(path))
     worst = 0.0

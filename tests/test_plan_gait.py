@@ -11,6 +11,7 @@ from plan_fixtures import repo_scenario, scenario_files, scenario_from_text
 from locoplan.plan import PlanError, compile_plan
 from locoplan.plan.constants import GAIT_MIN_DOUBLE_SUPPORT
 from locoplan.scenario import load_scenario
+from locoplan.sim.robot_plan import compile_robot_plan
 
 TIME_TOL = 1e-9  # float rounding of sums of a few decimal times
 
@@ -18,7 +19,7 @@ TIME_TOL = 1e-9  # float rounding of sums of a few decimal times
 @pytest.mark.parametrize("path", scenario_files(), ids=lambda p: p.stem)
 @pytest.mark.parametrize("strategy", ["dynamic", "quasi-static"])
 def test_feet_never_both_swing_and_swings_cover_locomotion(path, strategy) -> None:
-    plan = compile_plan(load_scenario(path), strategy)
+    plan = compile_robot_plan(load_scenario(path), strategy)
     times = np.linspace(-0.5, plan.t_end + 0.5, 20001)
     flags = plan.contact_flags(times)
     assert flags.any(axis=1).all(), "both feet in swing at once"

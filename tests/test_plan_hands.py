@@ -21,6 +21,7 @@ from locoplan.plan.constants import (
 )
 from locoplan.plan.hand_paths import pull_accel
 from locoplan.scenario import load_scenario
+from locoplan.sim.robot_plan import compile_robot_plan
 
 
 def rest_to_rest(distance: float, mass: float) -> float:
@@ -43,7 +44,7 @@ def _targets_along_plan(plan: Plan, times: np.ndarray) -> tuple[np.ndarray, np.n
 
 @pytest.mark.parametrize("path", scenario_files(), ids=lambda p: p.stem)
 def test_hand_targets_continuous_and_velocity_consistent(path) -> None:
-    plan = compile_plan(load_scenario(path))
+    plan = compile_robot_plan(load_scenario(path))
     boundaries = np.array(
         sorted({t for tr in plan.manipulation.tracks for g in tr.segments for t in (g.t0, g.t1)})
         or [0.5 * plan.t_end]

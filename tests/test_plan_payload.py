@@ -37,6 +37,7 @@ from locoplan.plan.payload import (
 )
 from locoplan.plan.statics import static_model
 from locoplan.scenario import load_scenario, load_scenario_file
+from locoplan.sim.robot_plan import compile_robot_plan
 from locoplan.sim.run import RunOptions
 
 runner = CliRunner()
@@ -417,9 +418,10 @@ def test_plan_without_holds_prints_no_margins(tmp_path: Path) -> None:
 
 def test_repository_scripts_are_not_refused() -> None:
     for path in scenario_files():
+        scenario = load_scenario(path)
         for strategy in ("dynamic", "quasi-static"):
-            plan = compile_plan(load_scenario(path), strategy)  # raises if refused
-            for m in payload_margins(plan, "hector"):
+            plan = compile_robot_plan(scenario, strategy)  # raises if refused
+            for m in payload_margins(plan, scenario.robot):
                 assert m.analysis.torque_ratio < 1.0, (path, m.hold)
 
 

@@ -78,6 +78,34 @@ def test_object_sunk_into_its_table_is_refused_with_the_resting_height(tmp_path:
     assert "centre at z = 0.550 m" in msg
 
 
+def test_h1_is_checked_against_its_own_legs_and_feet(tmp_path: Path) -> None:
+    """The limits come from the script's robot (robot.yaml `planner`, `foot`, `stance_width`):
+    H1's hip yaw range is +-24.6 deg (HECTOR's 30), its stride 0.31 m (0.18), and its feet
+    cover 0.246 m around the start (hypot(toe 0.14, half stance 0.203); HECTOR's 0.135)."""
+    head = HEAD + "robot: h1\n"
+    turn = head + "tasks:\n  - {action: turn, angle: 180, start: 0, duration: 1.5}\n"
+    [msg] = _issues(turn, tmp_path)
+    # 2 x 24.6 deg per 0.4 s = 123 deg/s at the peak; 1.5 x 180 / 123 = 2.19 s.
+    assert "the hip yaw range (+-24.6 deg) allows at most 123 deg/s" in msg
+    assert "at least 2.20 s" in msg
+    walk = head + "tasks:\n  - {action: walk, distance: [1.5, 0], start: 0, duration: 2.5}\n"
+    [msg] = _issues(walk, tmp_path)
+    # 0.31 m per 0.4 s period: 0.775 m/s (HECTOR would refuse it already at 0.45 m/s).
+    assert "at most 0.775 m/s" in msg and "peaks at 0.9 m/s" in msg
+    near = (
+        head
+        + "objects:\n"
+        + "  box: {shape: box, size: [0.1, 0.1, 0.1], mass: 1, position: [0.25, 0, 0.5]}\n"
+        + "tasks:\n  - {action: stand, start: 0, duration: 1}\n"
+    )
+    [msg] = _issues(near, tmp_path)
+    assert "comes within 0.200 m of the robot's start position" in msg
+    assert "the robot needs 0.246 m" in msg
+    # HECTOR stands beside the same box.
+    (tmp_path / "hector.yaml").write_text(near.replace("robot: h1\n", ""))
+    load_scenario_file(tmp_path / "hector.yaml")
+
+
 def test_validate_exits_2_with_file_line_column(tmp_path: Path) -> None:
     path = tmp_path / "fast.yaml"
     path.write_text(

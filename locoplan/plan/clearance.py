@@ -1,6 +1,7 @@
 """Clearance of planned hand paths from the scene (pure functions, SI units, radians).
 
-Hands are spheres of radius HAND_RADIUS around the hand point; objects (boxes, spheres) and
+Hands are spheres of the robot's hand radius (HECTOR's HAND_RADIUS by default) around the
+hand point; objects (boxes, spheres) and
 fixtures (boxes from the floor up to their top) are obstacles. The clearance of a hand at a
 point is its sphere's distance to the nearest obstacle surface (negative when it overlaps).
 
@@ -109,16 +110,17 @@ def track_clearance(
     yaw_offsets: tuple[float, ...] | None = None,
     dt: float = k.CLEARANCE_DT,
     give_up_below: float = -math.inf,
+    hand_radius: float = k.HAND_RADIUS,
 ) -> Clearance:
-    """Clearance of the hand sphere following `track` on [t0, t1] (s), sampled every `dt`
-    (and at t1; coarser where that would take more than MAX_CLEARANCE_SAMPLES), with the
-    trunk on its planned path turned by each of `yaw_offsets` (rad; None: 0 and +-the
-    expected yaw error, see the module docstring). The hand point moves at
-    most about 2 m/s, so 10 ms samples miss at most 2 cm of a path that grazes an edge;
-    thresholds are chosen with that in mind. The check stops early once the clearance is
-    below `give_up_below` (m; a search that only wants paths better than one it has); then
-    `first_below` is only some time below the threshold, not the first. `threshold` (m) is
-    one for every obstacle or one per obstacle (in the order of `obstacles`)."""
+    """Clearance of the hand sphere (radius `hand_radius`, m) following `track` on [t0, t1] (s),
+    sampled every `dt` (and at t1; coarser where that would take more than MAX_CLEARANCE_SAMPLES),
+    with the trunk on its planned path turned by each of `yaw_offsets` (rad; None: 0 and +-the
+    expected yaw error, see the module docstring). The hand point moves at most about 2 m/s, so 10
+    ms samples miss at most 2 cm of a path that grazes an edge; thresholds are chosen with that in
+    mind. The check stops early once the clearance is below `give_up_below` (m; a search that only
+    wants paths better than one it has); then `first_below` is only some time below the threshold,
+    not the first. `threshold` (m) is one for every obstacle or one per obstacle (in the order of
+    `obstacles`)."""
     best = Clearance(math.inf, t0, "", None)
     if not obstacles or t1 < t0:
         return best
@@ -147,7 +149,7 @@ def track_clearance(
         for off in offsets:
             p, _ = track.evaluate(t, base_pose(trunk, t, off))
             for ob, limit in zip(obstacles, limits, strict=True):
-                d = ob.distance(p, t) - k.HAND_RADIUS - drift
+                d = ob.distance(p, t) - hand_radius - drift
                 if d < limit:
                     below = True
                 if d < minimum:

@@ -21,6 +21,7 @@ from locoplan.plan.payload import (
 )
 from locoplan.plan.plan import Plan
 from locoplan.plan.profiles import CRUISE_RAMP
+from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
 from locoplan.plan.tasks import PlannedTask, plan_tasks, retime_quasi_static
 from locoplan.plan.trunk import build_trunk_path
 from locoplan.scenario.model import Scenario
@@ -34,14 +35,18 @@ def compile_plan(
     scenario: Scenario,
     strategy: str | None = None,
     *,
-    base_height: float = 0.60,
-    foot_width: float = 0.2,
+    base_height: float | None = None,
+    foot_width: float | None = None,
+    geometry: PlanGeometry = HECTOR_GEOMETRY,
 ) -> Plan:
     """Compile a validated scenario into a `Plan`.
 
     `strategy`: "dynamic" (tasks at the written times) or "quasi-static" (re-timed so that
-    locomotion and manipulation never overlap); None takes the scenario's. `base_height`: trunk
-    origin height of the reference (m); `foot_width`: lateral distance between the feet (m).
+    locomotion and manipulation never overlap); None takes the scenario's. `geometry`: the
+    robot's figures (trunk height, foothold spacing, hand poses, gait limits; HECTOR's by
+    default; `locoplan.sim.robot_plan.compile_robot_plan` passes the script's robot's).
+    `base_height`: trunk origin height of the reference (m); `foot_width`: lateral distance
+    between the feet (m); each, when given, replaces the geometry's.
     Raises `PlanError` for a scenario the compiler cannot honour (overlapping locomotion, an
     object not held when dropped, an unknown object or fixture, a task ending after `end`),
     and for a carry or place pose the robot cannot hold statically (`locoplan.plan.payload`:
@@ -52,10 +57,14 @@ def compile_plan(
     strategy = scenario.strategy if strategy is None else strategy
     if strategy not in STRATEGIES:
         raise PlanError(f"unknown strategy '{strategy}'; allowed: {', '.join(STRATEGIES)}")
-    if not (base_height > 0.0 and math.isfinite(base_height)):
-        raise ValueError(f"base_height must be a positive length in m, got {base_height}")
-    if not (foot_width > 0.0 and math.isfinite(foot_width)):
-        raise ValueError(f"foot_width must be a positive length in m, got {foot_width}")
+    if base_height is not None:
+        if not (base_height > 0.0 and math.isfinite(base_height)):
+            raise ValueError(f"base_height must be a positive length in m, got {base_height}")
+        geometry = replace(geometry, base_height=base_height)
+    if foot_width is not None:
+        if not (foot_width > 0.0 and math.isfinite(foot_width)):
+            raise ValueError(f"foot_width must be a positive length in m, got {foot_width}")
+        geometry = replace(geometry, foot_width=foot_width)
 
     tasks = plan_tasks(scenario)
     if strategy == "quasi-static":
@@ -77,20 +86,19 @@ def compile_plan(
             planned,
             t_end,
             end_shift,
-            base_height,
-            foot_width,
+            geometry,
             base_notes + notes,
         )
 
     plan = build(tasks)
-    waited, base_notes = _wait_for_heavy_lifts(scenario, tasks, plan)
+    waited, base_notes = _wait_for_heavy_lifts(scenario, tasks, plan, geometry)
     if waited != tasks:
         tasks = waited
         plan = build(tasks)
     try:
         check_grasp_reach(plan, scenario.robot)
     except InfeasiblePlanError as exc:
-        plan = _face_the_pick(scenario, tasks, plan, exc, build)
+        plan = _face_the_pick(scenario, tasks, plan, exc, build, geometry)
     check_place_reach(plan, scenario.robot, scenario.fixtures)
     check_payload(plan, scenario.robot)
     return with_lean_weights(plan, scenario.robot)
@@ -102,8 +110,7 @@ def _assemble(
     tasks: tuple[PlannedTask, ...],
     t_end: float,
     end_shift: float,
-    base_height: float,
-    foot_width: float,
+    geometry: PlanGeometry,
     notes: tuple[str, ...] = (),
 ) -> Plan:
     """The plan of `tasks` (planned, re-timed for `strategy`), before the reach and payload
@@ -111,14 +118,14 @@ def _assemble(
     contacts = build_contact_schedule(tasks, scenario.gait.period, scenario.gait.swing)
     start = scenario.robot_start
     trunk = build_trunk_path(
-        tasks, start.position[0], start.position[1], math.radians(start.yaw), base_height
+        tasks, start.position[0], start.position[1], math.radians(start.yaw), geometry.base_height
     )
-    footholds = build_footholds(contacts, trunk, foot_width)
+    footholds = build_footholds(contacts, trunk, geometry.foot_width)
     swings = tuple(iv for f in range(2) for iv in contacts.swing_intervals(f))
     # Only a plan that holds something needs the robot's statics (the payload check loads
     # the same cached model): about 1 s in a fresh process, which locomotion need not pay.
     leg_torque = _leg_torque(scenario.robot) if scenario.objects else math.inf
-    manipulation = build_manipulation(tasks, scenario, trunk, swings, leg_torque)
+    manipulation = build_manipulation(tasks, scenario, trunk, swings, leg_torque, geometry)
 
     # Drops and throws are done by the hands that picked the object.
     hand_words = {("L", "R"): "both", ("L",): "left", ("R",): "right"}
@@ -153,8 +160,8 @@ def _assemble(
         tasks=tasks,
         t_end=t_end,
         end_shift=end_shift,
-        base_height=base_height,
-        foot_width=foot_width,
+        base_height=geometry.base_height,
+        foot_width=geometry.foot_width,
         gait_period=scenario.gait.period,
         gait_swing=scenario.gait.swing,
         contacts=contacts,
@@ -167,6 +174,7 @@ def _assemble(
             for o in (fixture_obstacle(n, f) for n, f in scenario.fixtures.items())
         ),
         notes=notes,
+        geometry=geometry,
     )
 
 
@@ -187,6 +195,7 @@ def _face_the_pick(
     plan: Plan,
     exc: InfeasiblePlanError,
     build: Callable[[tuple[PlannedTask, ...], tuple[str, ...]], Plan],
+    geometry: PlanGeometry,
 ) -> Plan:
     """The plan with the turn that a pick starts in hurried, when the trunk would not face
     the object at its lift-off as written and `check_grasp_reach` refused it (`exc`).
@@ -199,7 +208,7 @@ def _face_the_pick(
     trunk stands facing the object while the hands close, as in any pick from in front), or
     sooner by HURRY_STEP while the hands planned afresh lift later, but no quicker than
     HURRIED_TURN_RATE on average (HURRIED_LOADED_TURN_RATE while another object is held
-    through the turn) nor than the hip yaw range allows at the gait's period
+    through the turn) nor than the hip yaw range (`geometry`'s) allows at the gait's period
     (`locoplan.scenario.feasibility.turn_rate_limit`). The robot stands facing the object
     until the turn's written end.
     Ending it only as early as the reach check needs was tried first: on the tuning seeds
@@ -223,7 +232,8 @@ def _face_the_pick(
         for h in plan.holds
     )
     cap = HURRIED_LOADED_TURN_RATE if loaded else HURRIED_TURN_RATE
-    rate = min(cap, turn_rate_limit(scenario.gait.period) * (1.0 - CRUISE_RAMP))
+    limit = turn_rate_limit(scenario.gait.period, geometry.hip_yaw_range)
+    rate = min(cap, limit * (1.0 - CRUISE_RAMP))
     shortest = ceil_time(amount / rate)
     if shortest >= turn.duration:
         raise exc
@@ -269,7 +279,7 @@ HURRIED_LOADED_WALK_SPEED = 0.3
 
 
 def _wait_for_heavy_lifts(
-    scenario: Scenario, tasks: tuple[PlannedTask, ...], plan: Plan
+    scenario: Scenario, tasks: tuple[PlannedTask, ...], plan: Plan, geometry: PlanGeometry
 ) -> tuple[tuple[PlannedTask, ...], tuple[str, ...]]:
     """The tasks with each walk, turn or step that starts inside the window of a pick of a
     heavy object, and would step before that pick ends, starting at the pick's end instead
@@ -342,11 +352,11 @@ def _wait_for_heavy_lifts(
         dist = math.hypot(*loco.distance) if loco.distance is not None else 0.0
         if amount / duration > HURRIED_LOADED_TURN_RATE + 1e-9:
             continue
-        if peak_rate(amount, duration) > turn_rate_limit(period) + 1e-9:
+        if peak_rate(amount, duration) > turn_rate_limit(period, geometry.hip_yaw_range) + 1e-9:
             continue
         if dist / duration > HURRIED_LOADED_WALK_SPEED + 1e-9:
             continue
-        if peak_rate(dist, duration) > walk_speed_limit(period) + 1e-9:
+        if peak_rate(dist, duration) > walk_speed_limit(period, geometry.walk_stride) + 1e-9:
             continue
         by_index[loco.index] = replace(loco, start=start)
         notes.append(

@@ -3,6 +3,14 @@
 Phase fractions are fractions of the task's duration, measured from its start. Poses marked
 "in trunk" are relative to the trunk origin in the trunk's yaw-only frame (x forward, y left,
 z up), in metres; the sign of y is flipped for the right hand.
+
+Robot figures (the hand poses, HAND_RADIUS, GRASP_TOLERANCE, CARRY_FORWARD,
+THROW_STOP_OFFSET, TRUNK_FRONT, WALK_STRIDE, HIP_YAW_RANGE, ROBOT_FOOTPRINT_RADIUS) are
+HECTOR's: they are the defaults of `locoplan.plan.robot_geometry.PlanGeometry`, which is what
+the planner reads; another robot states its own in its robot.yaml (`planner:`; see
+docs/robots.md). The phase fractions, accelerations and clearances were tuned and checked on
+HECTOR only (the scripts and envelope seeds each comment names); they are the same for every
+robot until a robot's closed loop says otherwise.
 """
 
 from __future__ import annotations
@@ -15,6 +23,17 @@ from typing import Final
 # Smallest double support kept after each swing when a short locomotion task squeezes the
 # gait cycle (s).
 GAIT_MIN_DOUBLE_SUPPORT: Final = 0.02
+# HECTOR's gait limits (`locoplan.scenario.feasibility`'s docstring derives them; robot.yaml
+# `planner.walk_stride` / `planner.hip_yaw_range_deg` for another robot). Half the kinematic
+# stride of the leg (m): thigh + calf 0.44 m, hip 0.40 m above the sole at the nominal 0.60 m
+# trunk height, sqrt(0.44^2 - 0.40^2) = 0.18 m ahead of or behind the hip.
+WALK_STRIDE: Final = 0.18
+# Hip yaw range (rad) either side of straight ahead (shared/robot.md).
+HIP_YAW_RANGE: Final = math.radians(30.0)
+# Radius (m) around the start position that HECTOR's feet occupy: the toe sphere 0.09 m ahead
+# of the ankle on a foot 0.1 m off the centre line, hypot(0.09, 0.10); for any robot
+# hypot(foot.toe, stance_width / 2) (`locoplan.sim.robot_plan.plan_geometry`).
+ROBOT_FOOTPRINT_RADIUS: Final = math.hypot(0.09, 0.10)
 
 
 # --- pick ------------------------------------------------------------------------------------
@@ -92,7 +111,8 @@ THROW_WINDUP_END: Final = 0.40
 THROW_ACCELERATE_END: Final = 0.61
 THROW_RELEASE: Final = 0.63
 THROW_FOLLOW_END: Final = 0.72
-# The follow-through ends this far beyond the carry pose along the throw direction (m): the
+# HECTOR's (`PlanGeometry.throw_stop_offset`; robot.yaml `planner.throw_stop_offset`). The
+# follow-through ends this far beyond the carry pose along the throw direction (m): the
 # whole line then runs from about 0.15 m behind the carry pose (the object clear of the
 # trunk's front) to 0.16 m ahead of it (the hands 0.44 m from the shoulders).
 THROW_STOP_OFFSET: Final = 0.16
@@ -103,9 +123,12 @@ THROW_CLEARANCE: Final = 0.04
 THROW_SPEED_GAIN: Final = 1.0
 
 # --- hand poses ------------------------------------------------------------------------------
-# Default (carry-ready) hand position of the LEFT hand in trunk (m); right hand mirrors y.
+# HECTOR's default (carry-ready) hand position of the LEFT hand in trunk (m); right hand
+# mirrors y: within 6 mm of where its keyframe puts the hands (0.274, 0.12, -0.051), so the
+# arms start at rest (`PlanGeometry.hand_default_in_trunk`; robot.yaml `planner.hand_default`).
 HAND_DEFAULT_IN_TRUNK: Final = (0.28, 0.12, -0.05)
-# Carry pose of a held object's centre in trunk (m): ahead of and slightly below the origin.
+# HECTOR's carry pose of a held object's centre in trunk (m): ahead of and slightly below the
+# origin (`PlanGeometry.carry_forward`; robot.yaml `planner.carry_forward`).
 CARRY_FORWARD: Final = 0.30
 # A picked object is carried where it was picked within this distance of CARRY_FORWARD (m),
 # then brought in to CARRY_FORWARD while the hands are free (at least CARRY_SETTLE_MIN, s),
@@ -119,7 +142,8 @@ CARRY_HEIGHT: Final = 0.02
 # An object carried through a walk, turn or steps comes in during the pick's raise until its
 # near face is CARRY_IN_GAP (m) from the trunk's front, TRUNK_FRONT (m) ahead of the trunk
 # origin (robots/hector/hector.xml: `trunk_box`'s half length), and stays there (no settle
-# out to CARRY_FORWARD). Why: in single support one hip pitch carries the whole upper body and
+# out to CARRY_FORWARD; TRUNK_FRONT is HECTOR's, `PlanGeometry.trunk_front`, robot.yaml
+# `planner.trunk_front`). Why: in single support one hip pitch carries the whole upper body and
 # the load; with the object's centre 0.30 m ahead the static single-support hip-pitch ratio
 # (pinocchio, 6-D sole wrench) is 0.77 at 7 kg and 0.87 at 8 kg, against 0.37 / 0.42 standing
 # on both feet, and the walk-carries of 5.4-7.8 kg saturated it in the first step after the
@@ -144,7 +168,8 @@ CARRY_SAG_PER_KG: Final = 0.004
 CARRY_SAG_FROM: Final = 5.0
 # Trunk-path sampling step (s) when looking for the fixtures a held object sweeps over.
 SWEEP_SAMPLE: Final = 0.05
-# Pre-grasp clearance outside the object's sides (m): from the hand point, so the hand sphere
+# HECTOR's pre-grasp clearance outside the object's sides (m; `PlanGeometry.grasp_clearance`: the
+# robot's hand radius + 3 cm): from the hand point, so the hand sphere
 # (HAND_RADIUS) keeps 3 cm, more than the hands' tracking error (about 2 cm).
 GRASP_CLEARANCE: Final = 0.05
 # Boxes carried through a walk, turn or steps are gripped this far above their centre (m), but at
@@ -159,7 +184,8 @@ GRASP_SQUEEZE: Final = 0.01
 # How near (m) a hand point must come to an object's surface for the hand to close on it: the
 # simulator's grasp model (locoplan.sim.grasp) and the plan's reach check of a grasp
 # (locoplan.plan.payload) share it. The hand sphere (HAND_RADIUS) touches the surface at 2 cm,
-# so a hand closing at 3 cm is 1 cm short of touching.
+# so a hand closing at 3 cm is 1 cm short of touching. HECTOR's: another robot's is its hand
+# radius + 1 cm (`PlanGeometry.grasp_tolerance`, `locoplan.sim.robot_plan.plan_geometry`).
 GRASP_TOLERANCE: Final = 0.03
 
 # Minimum horizontal distance below which an approach direction is taken from the planned
@@ -167,7 +193,8 @@ GRASP_TOLERANCE: Final = 0.03
 APPROACH_MIN_DISTANCE: Final = 1e-6
 
 # --- hand clearance (locoplan.plan.clearance) ------------------------------------------------
-# Radius of the hand collision spheres (m); robots/hector/hector.xml, geoms *_hand_sphere.
+# Radius of HECTOR's hand collision spheres (m); robots/hector/hector.xml, geoms
+# *_hand_sphere (`PlanGeometry.hand_radius`: robot.yaml `contacts.hand_radius`).
 HAND_RADIUS: Final = 0.02
 # Smallest gap (m) kept between a hand sphere and any object or fixture while the hands move
 # towards or away from an object: the hands track their targets within about 2 cm.
@@ -190,7 +217,8 @@ CLEARANCE_DT: Final = 0.01
 # Without the bound a script with a fixture 1e9 m away made `validate` sample a 9.5e9 s
 # retreat every 10 ms and never return (found by tests/test_scenario_fuzz.py in CI).
 MAX_CLEARANCE_SAMPLES: Final = 10000
-# Tucked hand pose of the LEFT hand in trunk (m): close to the body and low, the forearms
+# HECTOR's tucked hand pose of the LEFT hand in trunk (m; `PlanGeometry.hand_tuck_in_trunk`,
+# robot.yaml `planner.hand_tuck`): close to the body and low, the forearms
 # hanging forward: with the trunk at its nominal 0.60 m the hand sphere's top is at 0.38 m,
 # below every table, platform and conveyor top of the envelope (0.40-0.55 m), and the hand
 # stays within 0.16 m of the trunk axis, inside the nearest edge of anything the robot turns

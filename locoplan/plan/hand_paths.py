@@ -2,7 +2,9 @@
 line (pure functions over the planned trunk path; SI units, radians).
 
 Poses marked "in trunk" are relative to the trunk origin in the trunk's yaw-only frame; the
-sign of y flips for the right hand (hand index 0 = left, 1 = right). Every path that moves a
+sign of y flips for the right hand (hand index 0 = left, 1 = right). The robot's figures
+(hand poses, hand radius, carry distance, trunk front) come in as a `PlanGeometry` (`geo`,
+HECTOR's when not given). Every path that moves a
 hand towards or away from an object is checked with `locoplan.plan.clearance` against the
 scene along the planned trunk path, so that the hands do not sweep into what the robot turns
 or walks towards, nor knock what it has just put down.
@@ -17,6 +19,7 @@ from locoplan.plan import constants as k
 from locoplan.plan.clearance import Clearance, Obstacle, track_clearance
 from locoplan.plan.geometry import GRAVITY, half_extents
 from locoplan.plan.hands import HandSegment, HandWaypoint, Vec3, make_track
+from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
 from locoplan.plan.trunk import TrunkPath
 from locoplan.scenario.model import ObjectSpec
 
@@ -24,16 +27,16 @@ HAND_NAMES: tuple[str, str] = ("L", "R")
 SIDE = (1.0, -1.0)  # +y for the left hand, -y for the right
 
 
-def default_waypoint(hand: int) -> HandWaypoint:
-    """The default (carry-ready) hand pose in trunk."""
-    x, y, z = k.HAND_DEFAULT_IN_TRUNK
+def default_waypoint(hand: int, geo: PlanGeometry = HECTOR_GEOMETRY) -> HandWaypoint:
+    """The default (carry-ready) hand pose in trunk (`geo.hand_default_in_trunk`)."""
+    x, y, z = geo.hand_default_in_trunk
     return HandWaypoint((x, SIDE[hand] * y, z), "trunk")
 
 
-def tuck_waypoint(hand: int, width: float) -> HandWaypoint:
-    """The tucked hand pose in trunk (HAND_TUCK_IN_TRUNK), `width` (m) off the trunk's
+def tuck_waypoint(hand: int, width: float, geo: PlanGeometry = HECTOR_GEOMETRY) -> HandWaypoint:
+    """The tucked hand pose in trunk (`geo.hand_tuck_in_trunk`), `width` (m) off the trunk's
     centre line."""
-    x, _, z = k.HAND_TUCK_IN_TRUNK
+    x, _, z = geo.hand_tuck_in_trunk
     return HandWaypoint((x, SIDE[hand] * width, z), "trunk")
 
 
@@ -55,34 +58,51 @@ def rest_to_rest_distance(duration: float, accel: float) -> float:
 
 
 def lifted_tuck_waypoint(
-    hand: int, width: float, target: HandWaypoint, trunk: TrunkPath
+    hand: int,
+    width: float,
+    target: HandWaypoint,
+    trunk: TrunkPath,
+    geo: PlanGeometry = HECTOR_GEOMETRY,
 ) -> HandWaypoint:
     """The tucked pose raised to the height of `target` (in trunk: a "trunk" target's own z, a
     "world" target's height above the planned trunk height): close to the body, where nothing
     on a table is, at the height the reach then goes out level."""
     z = target.point[2] if target.frame == "trunk" else target.point[2] - trunk.height
-    x, _, _ = k.HAND_TUCK_IN_TRUNK
+    x, _, _ = geo.hand_tuck_in_trunk
     return HandWaypoint((x, SIDE[hand] * width, z), "trunk")
 
 
 def initial_waypoint(
-    hand: int, trunk: TrunkPath, obstacles: tuple[Obstacle, ...], until: float
+    hand: int,
+    trunk: TrunkPath,
+    obstacles: tuple[Obstacle, ...],
+    until: float,
+    geo: PlanGeometry = HECTOR_GEOMETRY,
 ) -> HandWaypoint:
     """Where the hand starts (and rests until its first task): the default pose, unless that
     pose comes within APPROACH_CLEARANCE of an object or fixture on [0, until] (s) along the
     planned trunk path (a box on a table 0.20-0.28 m ahead overlaps hands held 0.28 m ahead;
     turning towards a table sweeps them into it); then the tucked pose, low and within
-    0.16 m of the trunk axis (HAND_TUCK_IN_TRUNK). The simulator starts the arms in this
-    pose, so a scene laid out close to the robot is not touched before the plan means to."""
-    default = default_waypoint(hand)
+    0.16 m of the trunk axis (HAND_TUCK_IN_TRUNK; `geo`'s). The simulator starts the arms in
+    this pose, so a scene laid out close to the robot is not touched before the plan means
+    to."""
+    default = default_waypoint(hand, geo)
     idle = make_track(HAND_NAMES[hand], default, [])
-    c = track_clearance(idle, trunk, obstacles, 0.0, max(until, 0.0), k.APPROACH_CLEARANCE)
+    c = track_clearance(
+        idle,
+        trunk,
+        obstacles,
+        0.0,
+        max(until, 0.0),
+        k.APPROACH_CLEARANCE,
+        hand_radius=geo.hand_radius,
+    )
     if c.first_below is None:
         return default
-    return tuck_waypoint(hand, k.HAND_TUCK_IN_TRUNK[1])
+    return tuck_waypoint(hand, geo.hand_tuck_in_trunk[1], geo)
 
 
-def grip_height(obj: ObjectSpec) -> float:
+def grip_height(obj: ObjectSpec, geo: PlanGeometry = HECTOR_GEOMETRY) -> float:
     """How far above its centre (m) a box carried through a walk, turn or steps is gripped:
     GRASP_ABOVE_CENTRE (at most up to HAND_RADIUS + GRASP_TOP_MARGIN below its top). Two point
     contacts leave the box free to turn about the line through them, with nothing to damp it:
@@ -92,31 +112,35 @@ def grip_height(obj: ObjectSpec) -> float:
     its thin torque margins). A sphere is always gripped at its equator."""
     if obj.shape == "sphere":
         return 0.0
-    top = half_extents(obj)[2] - k.HAND_RADIUS - k.GRASP_TOP_MARGIN
+    top = half_extents(obj)[2] - geo.hand_radius - k.GRASP_TOP_MARGIN
     return max(0.0, min(k.GRASP_ABOVE_CENTRE, top))
 
 
 def carry_forward(
-    pose: tuple[float, float, float, float, float, float], ox: float, oy: float
+    pose: tuple[float, float, float, float, float, float],
+    ox: float,
+    oy: float,
+    geo: PlanGeometry = HECTOR_GEOMETRY,
 ) -> float:
     """How far ahead of the trunk (m) a picked object is carried at the pick's end: where it
     was picked (centre (ox, oy), m), seen from the planned trunk `pose` (x, y, yaw, ...) at the
-    pick's end, within CARRY_FORWARD +- CARRY_FORWARD_RANGE. Two point grips leave the object
-    free to swing about the grip axis (a pendulum with nothing to damp it), so the pick does
-    not pull it in horizontally in a hurry; held standing, it settles in to CARRY_FORWARD
+    pick's end, within CARRY_FORWARD (`geo.carry_forward`) +- CARRY_FORWARD_RANGE. Two point grips
+    leave the object free to swing about the grip axis (a pendulum with nothing to damp it), so the
+    pick does not pull it in horizontally in a hurry; held standing, it settles in to CARRY_FORWARD
     afterwards. (An object carried through locomotion comes in closer, to `carry_in`, during
     the raise: the manipulation planner takes the smaller of the two.)"""
     x, y, yaw = pose[0], pose[1], pose[2]
     ahead = math.cos(yaw) * (ox - x) + math.sin(yaw) * (oy - y)
-    lo, hi = k.CARRY_FORWARD - k.CARRY_FORWARD_RANGE, k.CARRY_FORWARD + k.CARRY_FORWARD_RANGE
+    lo = geo.carry_forward - k.CARRY_FORWARD_RANGE
+    hi = geo.carry_forward + k.CARRY_FORWARD_RANGE
     return min(max(ahead, lo), hi)
 
 
-def carry_in(depth: float) -> float:
+def carry_in(depth: float, geo: PlanGeometry = HECTOR_GEOMETRY) -> float:
     """How far ahead of the trunk (m) an object carried through locomotion is held: its near
-    face CARRY_IN_GAP from the trunk's front (TRUNK_FRONT), for an object reaching `depth`
-    (m) from its centre towards the robot (constants' docstring)."""
-    return k.TRUNK_FRONT + depth + k.CARRY_IN_GAP
+    face CARRY_IN_GAP from the trunk's front (TRUNK_FRONT, `geo.trunk_front`), for an object
+    reaching `depth` (m) from its centre towards the robot (constants' docstring)."""
+    return geo.trunk_front + depth + k.CARRY_IN_GAP
 
 
 def settle_in(
@@ -178,13 +202,23 @@ def path_clearance(
     threshold: float | tuple[float, ...],
     give_up_below: float = -math.inf,
     initial: HandWaypoint | None = None,
+    geo: PlanGeometry = HECTOR_GEOMETRY,
 ) -> Clearance:
     """Clearance on [t0, t1] (s) of the hand's track made of the segments `done` so far and
     the candidate segments `extra`, from the `initial` waypoint (default: the default pose;
     see `track_clearance` for `give_up_below`)."""
-    start = default_waypoint(hand) if initial is None else initial
+    start = default_waypoint(hand, geo) if initial is None else initial
     track = make_track(HAND_NAMES[hand], start, done + extra)
-    return track_clearance(track, trunk, obstacles, t0, t1, threshold, give_up_below=give_up_below)
+    return track_clearance(
+        track,
+        trunk,
+        obstacles,
+        t0,
+        t1,
+        threshold,
+        give_up_below=give_up_below,
+        hand_radius=geo.hand_radius,
+    )
 
 
 def approach_segments(
@@ -198,6 +232,7 @@ def approach_segments(
     trunk: TrunkPath,
     obstacles: tuple[Obstacle, ...],
     initial: HandWaypoint | None = None,
+    geo: PlanGeometry = HECTOR_GEOMETRY,
 ) -> list[HandSegment]:
     """Segments that bring the hand from where `done` leaves it (or from `initial`, default the
     default pose, when nothing is done yet) to `target` at t_end (s).
@@ -212,7 +247,7 @@ def approach_segments(
     beside the object) only has to get no closer (within APPROACH_SLACK). If no tucked path is
     clear, the one with the largest clearance wins.
     """
-    first = default_waypoint(hand) if initial is None else initial
+    first = default_waypoint(hand, geo) if initial is None else initial
     cur = done[-1].end if done else first
     t_free = done[-1].t1 if done else 0.0
 
@@ -225,7 +260,7 @@ def approach_segments(
         obs: tuple[Obstacle, ...] = obstacles,
     ) -> Clearance:
         return path_clearance(
-            hand, done, extra, t0, t1, trunk, obs, threshold, give_up_below, first
+            hand, done, extra, t0, t1, trunk, obs, threshold, give_up_below, first, geo
         )
 
     direct = [HandSegment(start, t_end, cur, target, task_index, "reach")]
@@ -244,13 +279,13 @@ def approach_segments(
     if c_direct.first_below is None:
         return direct
     t_hit = c_direct.first_below
-    tuck = tuck_waypoint(hand, tuck_y)
+    tuck = tuck_waypoint(hand, tuck_y, geo)
     # A hand that rests tucked already (the initial pose beside a near table, or a retreat's
     # end; in trunk) only widens to this tuck, in the time its arm needs for that, and the
     # rise and reach may begin as soon as the hand is free. (Standing picks from a tucked
     # start had no time for a full 0.4 s tuck as well, kept the straight reach and cut the
     # table's near edge with the hands: envelope seed 11, standing-hold-010 fell backwards.)
-    tx, _, tz = k.HAND_TUCK_IN_TRUNK
+    tx, _, tz = geo.hand_tuck_in_trunk
     if cur.frame == "trunk" and abs(cur.point[0] - tx) + abs(cur.point[2] - tz) < 1e-9:
         tuck_time = rest_to_rest_duration(math.dist(cur.point, tuck.point))
     else:
@@ -271,7 +306,7 @@ def approach_segments(
         # From the tucked pose (below table tops) the hand first rises close to the body to
         # the target's height, then reaches out level: a straight line from below a table's
         # top to a point above it would cut the table's near edge.
-        lifted = lifted_tuck_waypoint(hand, tuck_y, target, trunk)
+        lifted = lifted_tuck_waypoint(hand, tuck_y, target, trunk, geo)
         t_first = t_tuck1 + k.TUCK_LIFT_DURATION
         n = int((t_end - k.REACH_MIN_DURATION - t_first) / k.REACH_START_STEP + 1e-9)
         for j in range(n + 1):
@@ -302,14 +337,17 @@ def retreat_segments(
     back: HandWaypoint,
     trunk: TrunkPath,
     obstacles: tuple[Obstacle, ...],
+    geo: PlanGeometry = HECTOR_GEOMETRY,
 ) -> list[HandSegment]:
     """Segments from the opened hand at t0 (s) to the tucked pose at t1 (s) (the default pose
     could rest beside, or inside, what was just put down). Straight when that keeps
     APPROACH_CLEARANCE, otherwise first `back` along the object's side to behind its near
     face (world), then in; the clearer of the two if neither is clear."""
-    tuck = tuck_waypoint(hand, k.HAND_TUCK_IN_TRUNK[1])
+    tuck = tuck_waypoint(hand, geo.hand_tuck_in_trunk[1], geo)
     direct = [HandSegment(t0, t1, opened, tuck, task_index, "retract")]
-    c_direct = path_clearance(hand, done, direct, t0, t1, trunk, obstacles, k.APPROACH_CLEARANCE)
+    c_direct = path_clearance(
+        hand, done, direct, t0, t1, trunk, obstacles, k.APPROACH_CLEARANCE, geo=geo
+    )
     if c_direct.first_below is None:
         return direct
     t_back = t0 + k.DROP_BACK_SHARE * (t1 - t0)
@@ -317,7 +355,7 @@ def retreat_segments(
         HandSegment(t0, t_back, opened, back, task_index, "back"),
         HandSegment(t_back, t1, back, tuck, task_index, "retract"),
     ]
-    c_via = path_clearance(hand, done, via, t0, t1, trunk, obstacles, k.APPROACH_CLEARANCE)
+    c_via = path_clearance(hand, done, via, t0, t1, trunk, obstacles, k.APPROACH_CLEARANCE, geo=geo)
     return via if c_via.minimum > c_direct.minimum else direct
 
 
@@ -379,22 +417,23 @@ def throw_line(
     t_cruise: float,
     t_release: float,
     t_follow: float,
+    geo: PlanGeometry = HECTOR_GEOMETRY,
 ) -> ThrowLine:
     """The throw line for the commanded body-frame velocity (m/s) and phase times (s).
 
     It is laid out in the world from the planned trunk pose at the release, so that the
     hands' world velocity there is the commanded one whatever the trunk does (it recoils as
     the load is pushed): it ends THROW_STOP_OFFSET beyond the carry pose along the throw
-    direction. From rest at the wind-up point the quintic reaches the speed v after
-    v T / 2 (accelerate), holds it for v T (cruise: the hands' tracking catches up) and comes
-    back to rest after v T / 2 (follow-through)."""
+    direction (`geo`'s CARRY_FORWARD and THROW_STOP_OFFSET). From rest at the wind-up point
+    the quintic reaches the speed v after v T / 2 (accelerate), holds it for v T (cruise: the
+    hands' tracking catches up) and comes back to rest after v T / 2 (follow-through)."""
     vx, vy, vz = velocity_body
     speed = math.sqrt(vx * vx + vy * vy + vz * vz)
     u_body = (vx / speed, vy / speed, vz / speed) if speed > 1e-9 else (1.0, 0.0, 0.0)
     bx, by, byaw, *_ = trunk.pose_at(t_release)
     c, s = math.cos(byaw), math.sin(byaw)
     u = (c * u_body[0] - s * u_body[1], s * u_body[0] + c * u_body[1], u_body[2])
-    q = along((k.CARRY_FORWARD, 0.0, k.CARRY_HEIGHT), k.THROW_STOP_OFFSET, u_body)
+    q = along((geo.carry_forward, 0.0, k.CARRY_HEIGHT), geo.throw_stop_offset, u_body)
     stop = (bx + c * q[0] - s * q[1], by + s * q[0] + c * q[1], trunk.height + q[2])
     v = speed * k.THROW_SPEED_GAIN
     release = along(stop, -v * (t_follow - t_release) / 2.0, u)

@@ -3,20 +3,19 @@
 Phase fractions and poses are the named constants of `locoplan.plan.constants`; the hand paths
 themselves (approach, retreat, throw line) are `locoplan.plan.hand_paths`. Geometry:
 
-- pick: the approach direction is horizontal, from the robot's planned position at the
-  contact instant to the object's centre; the grasp axis is across it (the left hand on the
-  left of the approach). Pre-grasp points lie GRASP_CLEARANCE outside the object's sides,
-  reached without sweeping through the scene (tucking the hands in first if the trunk turns or
-  walks towards the object); the hands close until their spheres touch the sides, then press
-  GRASP_SQUEEZE in. A box carried through a walk, turn or steps is gripped above its centre
-  (it hangs level from the two point grips) and picked with PICK_CARRIED's phases, otherwise
-  at its centre with PICK_STANDING's. After the grip an object held standing is raised
-  straight up, then brought up to CARRY_HEIGHT in trunk as far ahead as it was picked, and
-  settles in to CARRY_FORWARD while the hands are free; one carried through locomotion is
-  pulled in to `carry_in` (its near face CARRY_IN_GAP from the trunk's front), no faster than
-  `pull_accel` allows for its mass: as far as that goes during the raise, the rest in the
-  carry move, up to the carry height and in at once, which takes the time it needs past the
-  pick's end (`_carry_move`; a "pull" after it if the object's drop comes first), and stays
+- pick: the approach direction is horizontal, from the robot's planned position at the contact
+  instant to the object's centre; the grasp axis is across it (the left hand on the left of the
+  approach). Pre-grasp points lie GRASP_CLEARANCE (the robot's) outside the object's sides, reached
+  without sweeping through the scene (tucking the hands in first if the trunk turns or walks towards
+  the object); the hands close until their spheres touch the sides, then press GRASP_SQUEEZE in. A
+  box carried through a walk, turn or steps is gripped above its centre (it hangs level from the two
+  point grips) and picked with PICK_CARRIED's phases, otherwise at its centre with PICK_STANDING's.
+  After the grip an object held standing is raised straight up, then brought up to CARRY_HEIGHT in
+  trunk as far ahead as it was picked, and settles in to CARRY_FORWARD while the hands are free; one
+  carried through locomotion is pulled in to `carry_in` (its near face CARRY_IN_GAP from the trunk's
+  front), no faster than `pull_accel` allows for its mass: as far as that goes during the raise, the
+  rest in the carry move, up to the carry height and in at once, which takes the time it needs past
+  the pick's end (`_carry_move`; a "pull" after it if the object's drop comes first), and stays
   there.
 - drop: the object's centre goes to `at`, or onto the fixture's top at the fully supported
   point nearest the robot's planned position at the release instant; the grasp axis is across
@@ -69,6 +68,7 @@ from locoplan.plan.hand_paths import (
 )
 from locoplan.plan.hands import HandSegment, HandTrack, HandWaypoint, Vec3, make_track
 from locoplan.plan.intervals import Intervals, merge_intervals
+from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
 from locoplan.plan.tasks import PlannedTask
 from locoplan.plan.trunk import TrunkPath
 from locoplan.scenario.model import ObjectSpec, Scenario
@@ -220,6 +220,8 @@ class _Builder:
     leg_torque: float = math.inf
     # When each hand's last retreat ends (s): it may outlast its drop.
     retreat_end: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
+    # The robot's figures (hand poses, hand radius, carry distance, trunk front).
+    geom: PlanGeometry = HECTOR_GEOMETRY
     initial: tuple[HandWaypoint, HandWaypoint] = field(
         default_factory=lambda: (default_waypoint(0), default_waypoint(1))
     )
@@ -231,10 +233,13 @@ class _Builder:
         # Each hand rests where it starts until its first manipulation task (or the end).
         last = max((t.end for t in self.tasks), default=0.0)
         obstacles = self.obstacles()
-        self.initial = (
-            initial_waypoint(0, self.trunk, obstacles, min(self.next_hand_use(0, 0.0), last)),
-            initial_waypoint(1, self.trunk, obstacles, min(self.next_hand_use(1, 0.0), last)),
+        left, right = (
+            initial_waypoint(
+                h, self.trunk, obstacles, min(self.next_hand_use(h, 0.0), last), self.geom
+            )
+            for h in (0, 1)
         )
+        self.initial = (left, right)
 
     def steps_during(self, t0: float, t1: float) -> bool:
         """Whether a foot swings (the robot stands on one foot) anywhere in [t0, t1] (s)."""
@@ -372,9 +377,10 @@ class _Builder:
         lx, ly = -ay, ax
         half = support_half_width(obj, oyaw, lx, ly)
         obstacles = self.obstacles()
-        lift = grip_height(obj) if moving else 0.0
+        geom = self.geom
+        lift = grip_height(obj, geom) if moving else 0.0
         gz = oz + lift
-        forward = carry_forward(self.trunk.pose_at(task.end), ox, oy)
+        forward = carry_forward(self.trunk.pose_at(task.end), ox, oy, geom)
         # Carried through locomotion: in to `carry_in` (hand_paths). The raise pulls it in
         # by `pull` (m, along the approach) as it goes up, no faster than `pull_accel` for its
         # mass, and the rest of the way (to `x_in`, m ahead of the trunk) in the carry move
@@ -389,7 +395,7 @@ class _Builder:
         accel = pull_accel(obj.mass)
         raise_accel = accel
         if moving:
-            target = carry_in(support_half_width(obj, oyaw, ax, ay))
+            target = carry_in(support_half_width(obj, oyaw, ax, ay), geom)
             if target < forward:
                 ahead = world_to_trunk(self.trunk, t_raise, (ox, oy, oz))[0]
                 pull = max(0.0, ahead - target)
@@ -407,8 +413,8 @@ class _Builder:
         carry_z = self._carry_height(task, obj, forward, gz + phases.raise_height, lift)
         for h in hands:
             side = SIDE[h]
-            pre = beside((ox, oy, gz), side * (half + k.GRASP_CLEARANCE), lx, ly)
-            touch = beside((ox, oy, gz), side * (half + k.HAND_RADIUS), lx, ly)
+            pre = beside((ox, oy, gz), side * (half + self.geom.grasp_clearance), lx, ly)
+            touch = beside((ox, oy, gz), side * (half + geom.hand_radius), lx, ly)
             grip = beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
             raised = (grip[0] - pull * ax, grip[1] - pull * ay, gz + phases.raise_height)
             carry = (forward, side * (half - k.GRASP_SQUEEZE), carry_z)
@@ -418,7 +424,7 @@ class _Builder:
             w_raised = HandWaypoint(raised, "world")
             w_carry = HandWaypoint(carry, "trunk")
             i = task.index
-            tuck_y = max(k.HAND_TUCK_IN_TRUNK[1], half + k.GRASP_CLEARANCE)
+            tuck_y = max(geom.hand_tuck_in_trunk[1], half + self.geom.grasp_clearance)
             approach = approach_segments(
                 h,
                 self.segments[h],
@@ -430,6 +436,7 @@ class _Builder:
                 self.trunk,
                 obstacles,
                 self.initial[h],
+                geom,
             )
             for seg in approach:
                 self.add(h, seg)
@@ -442,10 +449,10 @@ class _Builder:
             self.add(h, HandSegment(t_raise, t_carry, w_raised, w_carry, i, "carry"))
             t_end = t_carry
             forward = x_to
-            settles = not moving and abs(forward - k.CARRY_FORWARD) > 1e-3
+            settles = not moving and abs(forward - geom.carry_forward) > 1e-3
             if settles and t_settle - t_carry >= k.CARRY_SETTLE_MIN:
-                dist, took = settle_in(abs(forward - k.CARRY_FORWARD), t_settle - t_carry)
-                x_to = forward + math.copysign(dist, k.CARRY_FORWARD - forward)
+                dist, took = settle_in(abs(forward - geom.carry_forward), t_settle - t_carry)
+                x_to = forward + math.copysign(dist, geom.carry_forward - forward)
                 w_settled = HandWaypoint((x_to, carry[1], carry[2]), "trunk")
                 self.add(h, HandSegment(t_carry, t_carry + took, w_carry, w_settled, i, "settle"))
                 t_end = t_carry + took
@@ -642,7 +649,7 @@ class _Builder:
             # hands have nothing else to do.
             h_open = max(t_open, t_release + rest_to_rest_duration(math.dist(put, opened)))
             self.add(h, HandSegment(t_release, h_open, w_put, w_open, i, "open"))
-            tuck = tuck_waypoint(h, k.HAND_TUCK_IN_TRUNK[1]).point
+            tuck = tuck_waypoint(h, self.geom.hand_tuck_in_trunk[1], self.geom).point
             opened_in_trunk = world_to_trunk(self.trunk, h_open, opened)
             # The retreat goes back along the object first when a straight one would pass
             # close to it: up to about 1.4 times the straight distance.
@@ -650,7 +657,16 @@ class _Builder:
             h_end = max(task.end, h_open + rest_to_rest_duration(span))
             h_end = max(min(h_end, self.next_hand_use(h, task.end)), task.end, h_open + 0.05)
             for seg in retreat_segments(
-                h, self.segments[h], i, h_open, h_end, w_open, w_back, self.trunk, obstacles
+                h,
+                self.segments[h],
+                i,
+                h_open,
+                h_end,
+                w_open,
+                w_back,
+                self.trunk,
+                obstacles,
+                self.geom,
             ):
                 self.add(h, seg)
             self.retreat_end[h] = h_end
@@ -757,7 +773,7 @@ class _Builder:
         passed = self.swept_top(
             task.start,
             t_hover,
-            carry_reach(obj, k.CARRY_FORWARD + k.CARRY_FORWARD_RANGE),
+            carry_reach(obj, self.geom.carry_forward + k.CARRY_FORWARD_RANGE),
             task.onto,
         )
         hover_floor = 0.0
@@ -771,13 +787,13 @@ class _Builder:
             # A belt carries the released object towards one hand: that hand opens wider by
             # how far the object comes towards it before the drop ends.
             towards = max(0.0, side * (drift[0] * lx + drift[1] * ly))
-            width = half + k.GRASP_CLEARANCE + towards * (task.end - t_release)
+            width = half + self.geom.grasp_clearance + towards * (task.end - t_release)
             grip_at = (tx, ty, tz + hold.grip_height)
             rest = beside(grip_at, side * (half - k.GRASP_SQUEEZE), lx, ly)
             put = (rest[0], rest[1], rest[2] - k.DROP_PRESS)
             hover = (put[0], put[1], max(rest[2] + k.DROP_HOVER_HEIGHT, hover_floor))
             opened = beside(grip_at, side * width, lx, ly)
-            back = beside(opened, -(depth + k.GRASP_CLEARANCE), ax, ay)
+            back = beside(opened, -(depth + self.geom.grasp_clearance), ax, ay)
             points[h] = (put, hover, opened, back)
         return _DropGeometry(target, obj_yaw, drift, placed, points)
 
@@ -791,7 +807,9 @@ class _Builder:
         t_cruise = task.at_fraction(k.THROW_ACCELERATE_END)
         t_release = task.at_fraction(k.THROW_RELEASE)
         t_follow = task.at_fraction(k.THROW_FOLLOW_END)
-        line = throw_line(self.trunk, (vx, vy, vz), t_wind, t_cruise, t_release, t_follow)
+        line = throw_line(
+            self.trunk, (vx, vy, vz), t_wind, t_cruise, t_release, t_follow, self.geom
+        )
         radius = obj.size[0] if obj.shape == "sphere" else max(half_extents(obj))
         line = clear_throw_line(line, radius, self.obstacles(), t_wind)
         lat, vel = line.lateral, line.velocity
@@ -805,8 +823,8 @@ class _Builder:
         for h in hold.hands:
             side = SIDE[h]
             grip = side * (half - k.GRASP_SQUEEZE)
-            loose = side * (half + k.HAND_RADIUS)
-            opened = side * (half + k.GRASP_CLEARANCE)
+            loose = side * (half + self.geom.hand_radius)
+            opened = side * (half + self.geom.grasp_clearance)
             w_wind = HandWaypoint(along(centre_wind, grip, lat), "world")
             w_cruise = HandWaypoint(along(centre_cruise, grip, lat), "world", vel)
             # No squeeze at the release: the hands only touch the object, so nothing drags it
@@ -817,7 +835,8 @@ class _Builder:
             self.add(h, HandSegment(t_wind, t_cruise, w_wind, w_cruise, i, "accelerate"))
             self.add(h, HandSegment(t_cruise, t_release, w_cruise, w_rel, i, "cruise"))
             self.add(h, HandSegment(t_release, t_follow, w_rel, w_stop, i, "follow"))
-            self.add(h, HandSegment(t_follow, task.end, w_stop, default_waypoint(h), i, "return"))
+            rest = default_waypoint(h, self.geom)
+            self.add(h, HandSegment(t_follow, task.end, w_stop, rest, i, "return"))
         self._close_hold(hold, task, t_release, "throw")
         # Planned release state of the object's centre: the line's release point and the
         # commanded velocity relative to the planned trunk motion, for its landing point.
@@ -894,10 +913,11 @@ def build_manipulation(
     trunk: TrunkPath,
     swings: tuple[tuple[float, float], ...] = (),
     leg_torque: float = math.inf,
+    geom: PlanGeometry = HECTOR_GEOMETRY,
 ) -> ManipulationPlan:
     """Hand tracks, contacts, object holds and targets for the sorted planned tasks;
     `swings`: the planned foot swings (lift-off, touchdown; s), both feet; `leg_torque`: the
-    weakest leg joint's torque limit (N m)."""
+    weakest leg joint's torque limit (N m); `geom`: the robot's figures."""
     shift = max((t.shift for t in tasks), default=0.0)
     b = _Builder(
         scenario,
@@ -906,6 +926,7 @@ def build_manipulation(
         t_end=scenario.end_time + shift,
         swings=swings,
         leg_torque=leg_torque,
+        geom=geom,
     )
     for task in tasks:
         if task.action == "pick":

@@ -44,6 +44,7 @@ from locoplan.plan import constants as k
 from locoplan.plan.errors import InfeasiblePlanError, PlanError
 from locoplan.plan.hands import HandSegment, Vec3
 from locoplan.plan.manipulation import HAND_NAMES, ObjectHold
+from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
 
 if TYPE_CHECKING:
     # Imported when first needed (`_model`): statics pulls in pinocchio and, through the
@@ -298,9 +299,10 @@ def payload_margins(plan: Plan, robot: str) -> tuple[PayloadMargin, ...]:
     )
 
 
-def grasp_reach_limit() -> float:
-    """How far (m) a grip point may lie beyond the arms' reach (module docstring)."""
-    return k.GRASP_TOLERANCE + k.GRASP_SQUEEZE
+def grasp_reach_limit(geometry: PlanGeometry = HECTOR_GEOMETRY) -> float:
+    """How far (m) a grip point may lie beyond the arms' reach (module docstring): the
+    robot's grasp tolerance (`geometry`'s; HECTOR's GRASP_TOLERANCE) plus GRASP_SQUEEZE."""
+    return geometry.grasp_tolerance + k.GRASP_SQUEEZE
 
 
 def check_grasp_reach(plan: Plan, robot: str) -> None:
@@ -316,7 +318,8 @@ def check_grasp_reach(plan: Plan, robot: str) -> None:
         if grasp is None:
             continue
         residual = _grip_residual(model, grasp.pose)
-        if residual <= grasp_reach_limit():
+        limit = grasp_reach_limit(plan.geometry)
+        if residual <= limit:
             continue
         task = plan.tasks[hold.pick_task]
         later = _reachable_after(plan, hold, model)
@@ -325,7 +328,7 @@ def check_grasp_reach(plan: Plan, robot: str) -> None:
             f"infeasible (reach): at the lift-off of '{hold.object}' ({grasp.time:.2f} s) its "
             f"grip points are {residual:.3f} m beyond the arms' reach from the planned trunk "
             f"pose (up to {ahead:.2f} m from the trunk's axis; allowed "
-            f"{grasp_reach_limit():.2f} m: the hands close within {k.GRASP_TOLERANCE:.2f} m "
+            f"{limit:.2f} m: the hands close within {plan.geometry.grasp_tolerance:.2f} m "
             "of its sides)"
         )
         if later is not None:
@@ -359,7 +362,8 @@ def planned_grasp(plan: Plan, pick_task: int, robot: str) -> tuple[float, float]
 # package-transfer.yaml's conveyor moved to x = 0.53 / 0.55 / 0.57 / 0.59 m (misses of 5.6,
 # 7.4, 9.3 and 11.2 cm, the centre 12 cm inside): placed, placed, not placed, not placed;
 # envelope seed 5000 transfer-046 (2.2 cm left inside): not placed. This slack refuses the
-# last three and accepts the first two.
+# last three and accepts the first two. HECTOR's: the plan's robot's grasp tolerance
+# (`PlanGeometry.grasp_tolerance`) is what `check_place_reach` uses.
 PLACE_SLACK = k.GRASP_TOLERANCE
 
 
@@ -390,7 +394,8 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
         # This hold's planned place (an object may be picked and dropped more than once).
         cx, cy, _ = plan.object_positions(np.array([hold.release - 1e-6]))[0]
         inside = _inside_top(fixture, float(cx), float(cy))
-        allowed = max(grasp_reach_limit(), inside - PLACE_SLACK)
+        slack = plan.geometry.grasp_tolerance
+        allowed = max(grasp_reach_limit(plan.geometry), inside - slack)
         if residual <= allowed:
             continue
         ahead = max(math.hypot(p[0], p[1]) for p in pose.p_hands_trunk)
@@ -399,7 +404,7 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
             f"({t:.2f} s) the hands' points are {residual:.3f} m beyond the arms' reach from "
             f"the planned trunk pose (up to {ahead:.2f} m from the trunk's axis; allowed "
             f"{allowed:.2f} m: the object's planned centre lies {inside:.2f} m inside the "
-            f"edge of the fixture's top and must stay {PLACE_SLACK:.2f} m inside it); put the "
+            f"edge of the fixture's top and must stay {slack:.2f} m inside it); put the "
             "target nearer the robot or walk up to it before the drop",
             hold.release_task,
             loc=("tasks", hold.release_task),
@@ -428,9 +433,10 @@ def _reachable_after(plan: Plan, hold: ObjectHold, model: StaticModel) -> float 
         return None
     t0 = found[1]
     steps = int((plan.t_end - t0) / GRASP_REACH_STEP)
+    limit = grasp_reach_limit(plan.geometry)
     for j in range(1, steps + 1):
         later = _pose(plan, hold, hold.pick_task, "grip", at=t0 + j * GRASP_REACH_STEP)
-        if later is not None and _grip_residual(model, later[0]) <= grasp_reach_limit():
+        if later is not None and _grip_residual(model, later[0]) <= limit:
             return math.ceil(j * GRASP_REACH_STEP * 100.0 - 1e-9) / 100.0
     return None
 

@@ -20,6 +20,7 @@ from locoplan.plan.footholds import Footholds
 from locoplan.plan.gait import ContactSchedule, SwingPhase, side_index
 from locoplan.plan.hands import BasePose
 from locoplan.plan.manipulation import HAND_NAMES, ManipulationPlan, ObjectHold, ObjectTarget
+from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
 from locoplan.plan.tasks import PlannedTask
 from locoplan.plan.trunk import TrunkPath, TrunkReference, TrunkState
 
@@ -66,7 +67,9 @@ class Plan:
     scenario's nominal gait (each locomotion task's own fit is in `contacts.blocks`);
     `footprints`: each fixture's footprint on the floor as (x, y, yaw, half_x, half_y) (m, rad,
     world), where no foot may stand or land (fixtures are solid from the floor up);
-    `notes`: what the planner changed in the script's timing and why (one sentence each).
+    `notes`: what the planner changed in the script's timing and why (one sentence each);
+    `geometry`: the robot figures it was planned with (its `base_height` and `foot_width`
+    are the plan's own).
     """
 
     scenario_name: str
@@ -85,6 +88,7 @@ class Plan:
     events: tuple[PlanEvent, ...]
     footprints: tuple[tuple[float, float, float, float, float], ...] = ()
     notes: tuple[str, ...] = ()
+    geometry: PlanGeometry = HECTOR_GEOMETRY
 
     # --- feet (sigma_C1, sigma_C2) ---------------------------------------------------------
     def foot_stance(self, foot: int | str, t: float | npt.ArrayLike) -> bool | BoolArray:

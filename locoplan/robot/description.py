@@ -9,6 +9,7 @@ resulting `RobotDescription`; nothing else reads robot files.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -34,6 +35,16 @@ _LENGTH_TOL = 1e-9  # m, N m
 DEFAULT_HAND_RADIUS = 0.02  # m
 DEFAULT_FOOT_SPHERE_RADIUS = 0.01  # m
 DEFAULT_STANCE_WIDTH = 0.2  # m
+# Defaults of robot.yaml's optional `planner` section: HECTOR's figures, those of
+# `locoplan.plan.constants` (the plan's PlanGeometry defaults; tests/test_sim_robot_plan.py
+# checks that the two agree), so that HECTOR's file needs no such section.
+DEFAULT_HAND_DEFAULT = (0.28, 0.12, -0.05)  # m, left hand in trunk
+DEFAULT_HAND_TUCK = (0.06, 0.15, -0.24)  # m, left hand in trunk
+DEFAULT_CARRY_FORWARD = 0.30  # m
+DEFAULT_THROW_STOP_OFFSET = 0.16  # m
+DEFAULT_TRUNK_FRONT = 0.07  # m
+DEFAULT_WALK_STRIDE = 0.18  # m
+DEFAULT_HIP_YAW_RANGE_DEG = 30.0  # deg
 
 
 def _empty_indices() -> NDArray[np.intp]:
@@ -51,6 +62,28 @@ class RobotReach:
     shoulder_bodies: tuple[str, str]
     max: float
     nominal: float
+
+
+@dataclass(frozen=True, slots=True)
+class PlannerFigures:
+    """robot.yaml's optional `planner` section: what the plan compiler needs of the robot
+    beyond its limits and frames (m, rad; poses of the LEFT hand relative to the trunk origin
+    in its yaw-only frame, the right hand mirrors y). Absent keys take HECTOR's figures
+    (DEFAULT_*). `hand_default`: where the hands rest and start (the keyframe's hand
+    positions, so that the arms start at rest); `hand_tuck`: close to the body and below
+    the tables; `carry_forward`: a held object's centre ahead of the trunk origin;
+    `throw_stop_offset`: a throw's follow-through beyond the carry pose; `trunk_front`: the
+    trunk's front face ahead of its origin; `walk_stride`: how far a stance foot may move
+    ahead of or behind its hip in one gait period; `hip_yaw_range`: the hip yaw joint's
+    range either side of straight ahead."""
+
+    hand_default: tuple[float, float, float] = DEFAULT_HAND_DEFAULT
+    hand_tuck: tuple[float, float, float] = DEFAULT_HAND_TUCK
+    carry_forward: float = DEFAULT_CARRY_FORWARD
+    throw_stop_offset: float = DEFAULT_THROW_STOP_OFFSET
+    trunk_front: float = DEFAULT_TRUNK_FRONT
+    walk_stride: float = DEFAULT_WALK_STRIDE
+    hip_yaw_range: float = math.radians(DEFAULT_HIP_YAW_RANGE_DEG)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -91,6 +124,7 @@ class RobotDescription:
     foot_sphere_radius: float = DEFAULT_FOOT_SPHERE_RADIUS  # m, the sole spheres' radius
     stance_width: float = DEFAULT_STANCE_WIDTH  # m, lateral distance of the planned footholds
     reach: RobotReach | None = None
+    planner: PlannerFigures = PlannerFigures()
 
     @property
     def n_joints(self) -> int:
@@ -177,6 +211,7 @@ def load_robot_description(name_or_path: str | Path = "hector") -> RobotDescript
     feet, hands = contacts.get_sub("feet"), contacts.get_sub("hands")
     foot = reader.get_sub("foot")
     reach = _reach(reader.get_sub("reach")) if "reach" in reader.node else None
+    planner = _planner(reader.get_sub("planner")) if "planner" in reader.node else None
     nominal = reader.get_sub("nominal")
     nominal_deg = nominal.get_sub("joints_deg")
     if set(nominal_deg.keys()) != set(joint_names):
@@ -214,6 +249,7 @@ def load_robot_description(name_or_path: str | Path = "hector") -> RobotDescript
         ),
         stance_width=reader.get_positive_or("stance_width", DEFAULT_STANCE_WIDTH),
         reach=reach,
+        planner=planner if planner is not None else PlannerFigures(),
     )
     if np.any(desc.q_joints_nominal < desc.q_lower) or np.any(desc.q_joints_nominal > desc.q_upper):
         raise nominal_deg.error("nominal joint angles must lie within the joint ranges")
@@ -348,6 +384,42 @@ def _reach(node: _Reader) -> RobotReach:
     if not reach.nominal <= reach.max:
         raise node.error(f"nominal {reach.nominal} must not exceed max {reach.max}")
     return reach
+
+
+def _planner(node: _Reader) -> PlannerFigures:
+    def point(key: str, default: tuple[float, float, float]) -> tuple[float, float, float]:
+        if key not in node.node:
+            return default
+        value = node.node[key]
+        ok = isinstance(value, list) and len(value) == 3
+        if not ok or not all(
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            for v in value
+        ):
+            raise node.error(
+                f"{key!r} must be a list of three numbers [x, y, z] (m), got {value!r}"
+            )
+        if value[1] <= 0.0:
+            raise node.error(f"{key!r}: the left hand's y must be positive, got {value[1]!r}")
+        return (float(value[0]), float(value[1]), float(value[2]))
+
+    throw_stop = DEFAULT_THROW_STOP_OFFSET
+    if "throw_stop_offset" in node.node:
+        throw_stop = node.get_float("throw_stop_offset")
+        if throw_stop < 0.0:
+            raise node.error(f"'throw_stop_offset' must not be negative, got {throw_stop!r}")
+    hip_yaw = math.radians(DEFAULT_HIP_YAW_RANGE_DEG)
+    if "hip_yaw_range_deg" in node.node:
+        hip_yaw = math.radians(node.get_positive("hip_yaw_range_deg"))
+    return PlannerFigures(
+        hand_default=point("hand_default", DEFAULT_HAND_DEFAULT),
+        hand_tuck=point("hand_tuck", DEFAULT_HAND_TUCK),
+        carry_forward=node.get_positive_or("carry_forward", DEFAULT_CARRY_FORWARD),
+        throw_stop_offset=throw_stop,
+        trunk_front=node.get_positive_or("trunk_front", DEFAULT_TRUNK_FRONT),
+        walk_stride=node.get_positive_or("walk_stride", DEFAULT_WALK_STRIDE),
+        hip_yaw_range=hip_yaw,
+    )
 
 
 class _Reader:

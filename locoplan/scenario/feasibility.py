@@ -31,19 +31,16 @@ Reasons:
 
 from __future__ import annotations
 
+import functools
 import math
+from pathlib import Path
 
+from locoplan.plan.constants import HIP_YAW_RANGE, WALK_STRIDE
 from locoplan.plan.profiles import least_duration, peak_rate
+from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
 from locoplan.scenario.messages import LocatedIssue
 from locoplan.scenario.model import FixtureSpec, ObjectSpec, Scenario, TurnTask, WalkTask
 
-# Half the kinematic stride of the leg (m): see the module docstring.
-WALK_STRIDE = 0.18
-# Hip yaw range (rad) either side of straight ahead (shared/robot.md).
-HIP_YAW_RANGE = math.radians(30.0)
-# Radius (m) around the start position that the feet occupy: the toe sphere 0.09 m ahead of
-# the ankle on a foot 0.1 m off the centre line, hypot(0.09, 0.10).
-ROBOT_FOOTPRINT_RADIUS = math.hypot(0.09, 0.10)
 # Interpenetration (m) of an object and a fixture below which the object rests on it.
 OVERLAP_TOLERANCE = 0.005
 
@@ -54,21 +51,24 @@ def ceil_time(t: float) -> float:
     return math.ceil(t * 100.0 - 1e-6) / 100.0
 
 
-def walk_speed_limit(period: float) -> float:
-    """Peak walk speed (m/s) the legs step at a gait `period` (s): WALK_STRIDE / period."""
-    return WALK_STRIDE / period
+def walk_speed_limit(period: float, stride: float = WALK_STRIDE) -> float:
+    """Peak walk speed (m/s) the legs step at a gait `period` (s): `stride` / period (the
+    robot's WALK_STRIDE, m; HECTOR's unless given)."""
+    return stride / period
 
 
-def turn_rate_limit(period: float) -> float:
-    """Peak yaw rate (rad/s) the hip yaw range allows at a gait `period` (s)."""
-    return 2.0 * HIP_YAW_RANGE / period
+def turn_rate_limit(period: float, hip_yaw_range: float = HIP_YAW_RANGE) -> float:
+    """Peak yaw rate (rad/s) the hip yaw range (rad either side; HECTOR's unless given)
+    allows at a gait `period` (s)."""
+    return 2.0 * hip_yaw_range / period
 
 
-def _rate_issues(scenario: Scenario) -> list[LocatedIssue]:
+def _rate_issues(scenario: Scenario, geometry: PlanGeometry) -> list[LocatedIssue]:
     period = scenario.gait.period
     issues: list[LocatedIssue] = []
-    v_max = walk_speed_limit(period)
-    w_max = turn_rate_limit(period)
+    v_max = walk_speed_limit(period, geometry.walk_stride)
+    w_max = turn_rate_limit(period, geometry.hip_yaw_range)
+    hip_yaw_deg = math.degrees(geometry.hip_yaw_range)
     for i, task in enumerate(scenario.tasks):
         if isinstance(task, WalkTask):
             dist = math.hypot(task.distance[0], task.distance[1])
@@ -96,7 +96,8 @@ def _rate_issues(scenario: Scenario) -> list[LocatedIssue]:
                         f"infeasible (rate): {task.action} by {abs(angle):g} deg in "
                         f"{task.duration:g} s peaks at {math.degrees(rate):.0f} deg/s (1.5x "
                         f"the average: the rate ramps up and down); the hip yaw range "
-                        f"(+-30 deg) allows at most {math.degrees(w_max):.0f} deg/s with a gait "
+                        f"(+-{hip_yaw_deg:.3g} deg) allows at most "
+                        f"{math.degrees(w_max):.0f} deg/s with a gait "
                         f"period of {period:g} s: give it at least {need:.2f} s",
                     )
                 )
@@ -163,10 +164,10 @@ def _distance_to_rect(
     return math.hypot(max(du, 0.0), max(dv, 0.0))
 
 
-def _overlap_issues(scenario: Scenario) -> list[LocatedIssue]:
+def _overlap_issues(scenario: Scenario, geometry: PlanGeometry) -> list[LocatedIssue]:
     issues: list[LocatedIssue] = []
     sx, sy = scenario.robot_start.position
-    r = ROBOT_FOOTPRINT_RADIUS
+    r = geometry.footprint_radius
     for name, obj in scenario.objects.items():
         rect = _object_rect(obj)
         if obj.shape == "sphere":
@@ -202,6 +203,36 @@ def _overlap_issues(scenario: Scenario) -> list[LocatedIssue]:
     return issues
 
 
-def check_feasibility(scenario: Scenario) -> list[LocatedIssue]:
-    """Every infeasibility of `scenario` found without simulating (module docstring)."""
-    return _rate_issues(scenario) + _overlap_issues(scenario)
+def check_feasibility(
+    scenario: Scenario, geometry: PlanGeometry = HECTOR_GEOMETRY
+) -> list[LocatedIssue]:
+    """Every infeasibility of `scenario` found without simulating (module docstring), for
+    the robot whose figures `geometry` holds (its walk stride, hip yaw range and footprint;
+    HECTOR's by default; the loader passes the script's robot's, `robot_geometry`)."""
+    return _rate_issues(scenario, geometry) + _overlap_issues(scenario, geometry)
+
+
+def robot_geometry(robot: str) -> PlanGeometry:
+    """The plan figures of the robot `robot` (a name or an absolute robot path), HECTOR's
+    when its description does not load (the plan then refuses the script at its `robot`,
+    with the loader's message). Descriptions are loaded once per robot file per process."""
+    from locoplan.exceptions import RobotDescriptionError
+    from locoplan.robot.description import resolve_robot_yaml
+
+    try:
+        path = resolve_robot_yaml(robot).resolve()
+    except RobotDescriptionError:
+        return HECTOR_GEOMETRY
+    return _geometry_of(path)
+
+
+@functools.cache
+def _geometry_of(path: Path) -> PlanGeometry:
+    from locoplan.exceptions import RobotDescriptionError
+    from locoplan.plan.robot_geometry import plan_geometry
+    from locoplan.robot.description import load_robot_description
+
+    try:
+        return plan_geometry(load_robot_description(path))
+    except (RobotDescriptionError, ValueError):
+        return HECTOR_GEOMETRY

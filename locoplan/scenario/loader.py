@@ -23,7 +23,7 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from locoplan.exceptions import ScenarioError, ScenarioIssue
-from locoplan.scenario.feasibility import check_feasibility
+from locoplan.scenario.feasibility import check_feasibility, robot_geometry
 from locoplan.scenario.messages import LocatedIssue, show, validation_issues
 from locoplan.scenario.model import Scenario
 from locoplan.scenario.semantics import BUILTIN_ROBOTS, check_semantics, resolve_robot_path
@@ -122,7 +122,10 @@ def load_scenario_file(source: str | Path, text: str | bytes | None = None) -> L
         )
     if not located and scenario is not None:
         # What the robot cannot do, once the script is valid as a script.
-        located += check_feasibility(scenario)
+        robot = scenario.robot
+        if robot not in BUILTIN_ROBOTS:
+            robot = str(resolve_robot_path(robot, src.path.parent if src.path else None))
+        located += check_feasibility(scenario, robot_geometry(robot))
     if located:
         raise ScenarioError(_capped([place(issue) for issue in located], untranslated))
     assert scenario is not None  # no issue means validation succeeded

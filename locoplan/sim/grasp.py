@@ -1,16 +1,16 @@
 """Grasping and conveyor belts: the physics the plain contact model does not give.
 
-Grasp. A hand closes on an object when the plan says the hand reaches it (the pick's grasp
-instant) AND the hand really touches it in MuJoCo: every planned hand must be within
-GRASP_TOLERANCE of the object's surface. Closing switches on a point connection (MuJoCo
-`connect` equality) between the hand point and the object at their current positions (so
-nothing jumps or teleports); hands are point contacts, as in the paper (3-D forces, no
-moments). A 6-D weld per hand was tried first: with 3-DoF arms, two welds close a kinematic
-loop with no mobility left, so the hands could not move the box and the arm torques blew up.
-from then on the object's weight reaches the robot through the hands in the physics. At the
-planned release instant (drop or throw) the welds are switched off. If the hands are not
-there by GRASP_WINDOW after the planned lift-off, the grasp fails (an event, and the object
-stays where it is), which the metrics turn into a failed pick.
+Grasp. A hand closes on an object when the plan says the hand reaches it (the pick's grasp instant)
+AND the hand really touches it in MuJoCo: every planned hand must be within GRASP_TOLERANCE (the
+robot's: its hand radius + 1 cm) of the object's surface. Closing switches on a point connection
+(MuJoCo `connect` equality) between the hand point and the object at their current positions (so
+nothing jumps or teleports); hands are point contacts, as in the paper (3-D forces, no moments). A
+6-D weld per hand was tried first: with 3-DoF arms, two welds close a kinematic loop with no
+mobility left, so the hands could not move the box and the arm torques blew up. from then on the
+object's weight reaches the robot through the hands in the physics. At the planned release instant
+(drop or throw) the welds are switched off. If the hands are not there by GRASP_WINDOW after the
+planned lift-off, the grasp fails (an event, and the object stays where it is), which the metrics
+turn into a failed pick.
 
 Palms. The point connections leave a box free to turn about the line through the two hands (the
 grip axis), and nothing in them damps it: carried boxes swung 20-60 deg in loaded turns and
@@ -83,8 +83,14 @@ def surface_distance(scene: Scene, data: mujoco.MjData, name: str, point: FloatA
 class GraspManager:
     """Closes and opens the grasp welds following the plan and the measured hand positions."""
 
-    def __init__(self, scene: Scene, holds: tuple[ObjectHold, ...]) -> None:
+    def __init__(
+        self, scene: Scene, holds: tuple[ObjectHold, ...], tolerance: float = GRASP_TOLERANCE
+    ) -> None:
+        """`tolerance` (m): how near every planned hand point must come to the object's
+        surface for the hands to close (the plan's robot's `PlanGeometry.grasp_tolerance`;
+        HECTOR's GRASP_TOLERANCE by default)."""
         self.scene = scene
+        self.tolerance = tolerance
         side = {"L": 0, "R": 1}
         self.holds = [_HoldState(h, tuple(side[x] for x in h.hands)) for h in holds]
         self._hand_sites = [
@@ -198,7 +204,7 @@ class GraspManager:
                     surface_distance(self.scene, data, name, data.site_xpos[self._hand_sites[k]])
                     for k in hs.hands
                 ]
-                if max(gaps) <= GRASP_TOLERANCE:
+                if max(gaps) <= self.tolerance:
                     for k in hs.hands:
                         self._close(name, k, data)
                     R_obj = data.xmat[self.scene.object_body_ids[name]].reshape(3, 3)

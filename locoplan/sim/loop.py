@@ -172,7 +172,7 @@ class ClosedLoop:
         self.backend = MujocoBackend(scene)
         tracks = plan.manipulation.tracks
         # Arms start in the nominal keyframe unless the plan starts a hand elsewhere (tucked).
-        moved = any(tr.initial != default_waypoint(i) for i, tr in enumerate(tracks))
+        moved = any(tr.initial != default_waypoint(i, plan.geometry) for i, tr in enumerate(tracks))
         self.backend.reset(
             start_xy, start_yaw, tuple(tr.initial.point for tr in tracks) if moved else None
         )
@@ -182,7 +182,7 @@ class ClosedLoop:
         self.controller = LocoManipulationController(PinocchioRobot(desc), desc, plan, settings)
         self.log = log
         self.pushes = pushes
-        self.grasp = GraspManager(scene, plan.holds)
+        self.grasp = GraspManager(scene, plan.holds, plan.geometry.grasp_tolerance)
         self.conveyor = ConveyorDrive(scene)
         self.record = RunRecord(
             joint_names=tuple(desc.joint_names),
