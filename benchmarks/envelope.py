@@ -1,11 +1,13 @@
 """Issue 12's envelope benchmark: generated task scripts, run closed loop, counted per family.
 
 Run: .venv/bin/python benchmarks/envelope.py --n N --seed S [--family F ...]
-     [--strategy dynamic|quasi-static|both] [--jobs J] [--out DIR] [--json PATH]
-     [--timeout SECONDS]
+     [--robot NAME] [--strategy dynamic|quasi-static|both] [--jobs J] [--out DIR]
+     [--json PATH] [--timeout SECONDS]
 
-Draws N scripts with `locoplan.envelope.generate_suite(N, S, families)` (the families mixed as
-issue 12's 80-script sample was), writes each to DIR/scripts/<family>/<name>.yaml (and, for
+Draws N scripts with `locoplan.envelope.generate_suite(N, S, families, robot)` (the families
+mixed as issue 12's 80-script sample was; `--robot NAME`: the envelope at that robot's scale,
+`locoplan.envelope.ranges.envelope_ranges`, its scripts saying `robot: NAME`; default HECTOR's
+table as written), writes each to DIR/scripts/<family>/<name>.yaml (and, for
 the quasi-static strategy, the same script with `strategy: quasi-static` to
 DIR/scripts-quasi-static/<family>/<name>.yaml, so that `locoplan run PATH` reproduces either
 run as it was), validates them all with `prepare_batch` and runs the valid ones with
@@ -267,6 +269,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--family", action="append", choices=FAMILIES, help="only this family (repeatable)"
     )
+    parser.add_argument(
+        "--robot",
+        default=None,
+        help="draw the envelope at this robot's scale (a name under robots/ or a robot.yaml "
+        "path; default: HECTOR's ranges as written)",
+    )
     parser.add_argument("--strategy", choices=(*STRATEGIES, "both"), default="both")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--out", type=Path, default=Path("runs/envelope"))
@@ -280,7 +288,7 @@ def main(argv: list[str] | None = None) -> int:
     err = Console(stderr=True, highlight=False, width=max(132, Console().width))
 
     t0 = time.perf_counter()
-    scripts = generate_suite(args.n, args.seed, args.family)
+    scripts = generate_suite(args.n, args.seed, args.family, args.robot)
     where = write_scripts(scripts, args.out, strategies)
     cases = prepare_batch(sorted(where), args.out / "runs", use_cache=False)
     valid = sum(c.job is not None for c in cases)
@@ -310,6 +318,7 @@ def main(argv: list[str] | None = None) -> int:
         doc = {
             "n": args.n,
             "seed": args.seed,
+            "robot": args.robot or "hector",
             "families": sorted({s.family for s in scripts}, key=FAMILIES.index),
             "strategies": list(strategies),
             "wall_time_s": round(wall, 2),

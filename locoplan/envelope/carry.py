@@ -15,15 +15,15 @@ from locoplan.envelope.compose import (
     NoLayout,
     end_after,
     expectations,
+    fits,
     rect_of,
     rt,
     table_with_object,
     target,
     turn_limit_deg,
+    walk_limit,
     wrap_deg,
 )
-from locoplan.envelope.geometry import layout_ok
-from locoplan.scenario.feasibility import walk_speed_limit
 
 GEOMETRY_TRIES = 20
 # m: side-carry keeps the table and the platform this far apart across the step, plus the
@@ -43,19 +43,19 @@ def walk_carry(d: Draw, name: str) -> Doc:
     period = gait["period"]
     turn = d.sign() * d.angle(*rg.WALK_CARRY_TURN)
     yaw0 = wrap_deg(-turn)
-    mass = d.mass(rg.WALK_CARRY_MASS)
+    mass = d.mass(d.r.walk_carry_mass)
     pick, pick_d = 0.5, d.time(*rg.PICK_DURATION)
     pick_end = rt(pick + pick_d)
     tasks: list[Doc] = [{"action": "pick", "object": "box", "start": pick, "duration": pick_d}]
     walk = pick_end
     if abs(turn) >= 0.05:
         turn_start = rt(pick_end - d.time(*rg.WALK_CARRY_TURN_LEAD))
-        turn_d = d.duration(turn, rg.WALK_CARRY_TURN_RATE, period, turn_limit_deg(period))
+        turn_d = d.duration(turn, rg.WALK_CARRY_TURN_RATE, period, turn_limit_deg(d, period))
         tasks.append({"action": "turn", "angle": turn, "start": turn_start, "duration": turn_d})
         walk = rt(turn_start + turn_d)
     walk = rt(walk + d.time(0.0, 0.3))
     distance = d.length(*rg.WALK_CARRY_DISTANCE)
-    walk_d = d.duration(distance, rg.WALK_CARRY_SPEED, period, walk_speed_limit(period))
+    walk_d = d.duration(distance, rg.WALK_CARRY_SPEED, period, walk_limit(d, period))
     walk_end = rt(walk + walk_d)
     tasks.append({"action": "walk", "distance": [distance, 0.0], "start": walk, "duration": walk_d})
     drop = max(pick_end, rt(walk_end - d.time(*rg.WALK_CARRY_DROP_LEAD)))
@@ -68,8 +68,8 @@ def walk_carry(d: Draw, name: str) -> Doc:
         placed = table_with_object(d, (0.0, 0.0), yaw0, mass)
         goal = target(d, (distance, 0.0), 0.0, "platform", max(placed.obj["size"][:2]))
         box = rect_of(placed.obj)
-        if layout_ok([rect_of(placed.table), rect_of(goal)], path, [box]) and layout_ok(
-            [box, rect_of(goal)], path[:1]
+        if fits(d, [rect_of(placed.table), rect_of(goal)], path, [box]) and fits(
+            d, [box, rect_of(goal)], path[:1]
         ):
             break
     else:
@@ -101,11 +101,11 @@ def side_carry(d: Draw, name: str) -> Doc:
     gait = d.manip_gait()
     period = gait["period"]
     side = d.sign() * d.length(*rg.SIDE_STEP)
-    mass = d.mass(rg.SIDE_MASS)
+    mass = d.mass(d.r.side_mass)
     pick, pick_d = 0.5, d.time(*rg.PICK_DURATION)
     pick_end = rt(pick + pick_d)
     walk = rt(pick_end + d.time(0.0, 0.3))
-    walk_d = d.duration(side, rg.SIDE_SPEED, period, walk_speed_limit(period))
+    walk_d = d.duration(side, rg.SIDE_SPEED, period, walk_limit(d, period))
     drop = rt(walk + walk_d + d.time(0.0, 0.3))
     drop_d = d.time(*rg.DROP_DURATION)
     tasks: list[Doc] = [
@@ -130,8 +130,8 @@ def side_carry(d: Draw, name: str) -> Doc:
         width = d.length(least, min(hi, free))
         goal = target(d, (0.0, side), 0.0, "platform", max(placed.obj["size"][:2]), width=width)
         box = rect_of(placed.obj)
-        if layout_ok([rect_of(placed.table), rect_of(goal)], path, [box]) and layout_ok(
-            [box, rect_of(goal)], path[:1]
+        if fits(d, [rect_of(placed.table), rect_of(goal)], path, [box]) and fits(
+            d, [box, rect_of(goal)], path[:1]
         ):
             break
     else:
@@ -156,7 +156,7 @@ def standing_hold(d: Draw, name: str) -> Doc:
     """Stand 0.5 s, pick HOLD_MASS from a table in front, hold it standing HOLD_TIME, put it
     back on the same table (like issue 12's hold-11kg example)."""
     gait = d.manip_gait()
-    mass = d.mass(rg.HOLD_MASS)
+    mass = d.mass(d.r.hold_mass)
     pick, pick_d = 0.5, d.time(*rg.PICK_DURATION)
     hold = rt(pick + pick_d)
     hold_d = d.time(*rg.HOLD_TIME)
@@ -169,7 +169,7 @@ def standing_hold(d: Draw, name: str) -> Doc:
         {"action": "drop", "object": "block", "onto": "table", "start": drop, "duration": drop_d},
     ]
     placed = table_with_object(d, (0.0, 0.0), 0.0, mass)
-    if not layout_ok([rect_of(placed.table)], [(0.0, 0.0)], [rect_of(placed.obj)]):
+    if not fits(d, [rect_of(placed.table)], [(0.0, 0.0)], [rect_of(placed.obj)]):
         raise NoLayout("table on the robot")
     return {
         "version": 1,

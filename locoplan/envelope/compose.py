@@ -18,9 +18,9 @@ from typing import Any
 import numpy as np
 
 from locoplan.envelope import ranges as rg
-from locoplan.envelope.geometry import Rect
+from locoplan.envelope.geometry import Rect, layout_ok
 from locoplan.plan.profiles import peak_rate
-from locoplan.scenario.feasibility import ceil_time, turn_rate_limit
+from locoplan.scenario.feasibility import ceil_time, turn_rate_limit, walk_speed_limit
 
 Doc = dict[str, Any]
 
@@ -42,9 +42,23 @@ def within_gait(duration: float, amount: float, gait_limit: float) -> float:
     return duration
 
 
-def turn_limit_deg(period: float) -> float:
-    """The feasibility check's turn rate limit (deg/s) at a gait `period`."""
-    return math.degrees(turn_rate_limit(period))
+def turn_limit_deg(d: Draw, period: float) -> float:
+    """The feasibility check's turn rate limit (deg/s) at a gait `period`, for the robot of
+    `d`'s ranges."""
+    return math.degrees(turn_rate_limit(period, d.r.hip_yaw_range))
+
+
+def walk_limit(d: Draw, period: float) -> float:
+    """The feasibility check's walk speed limit (m/s) at a gait `period`, for the robot of
+    `d`'s ranges."""
+    return walk_speed_limit(period, d.r.walk_stride)
+
+
+def fits(
+    d: Draw, fixtures: Sequence[Rect], path: Sequence[Sequence[float]], loose: Sequence[Rect] = ()
+) -> bool:
+    """`layout_ok` with the robot's radius (`d`'s ranges)."""
+    return layout_ok(fixtures, path, loose, robot_radius=d.r.robot_radius)
 
 
 def rl(x: float) -> float:
@@ -63,10 +77,12 @@ def wrap_deg(a: float) -> float:
 
 
 class Draw:
-    """Uniform draws on grids from one numpy Generator."""
+    """Uniform draws on grids from one numpy Generator, over the ranges of one robot (`r`:
+    the robot-dependent ones; HECTOR's by default)."""
 
-    def __init__(self, rng: np.random.Generator) -> None:
+    def __init__(self, rng: np.random.Generator, ranges: rg.EnvelopeRanges = rg.HECTOR_RANGES):
         self.rng = rng
+        self.r = ranges
 
     def grid(self, lo: float, hi: float, step: float) -> float:
         """Uniform over the multiples of `step` in [lo, hi] (at least one must exist)."""
@@ -167,8 +183,8 @@ def table_with_object(
     when given, draws the side across the direction from the object's extent across it).
     A box has sides BOX_SIDE (its height on a 2 mm grid so that its centre z = top +
     height / 2 exactly); a sphere BALL_RADIUS."""
-    near = d.length(*rg.NEAR_SIDE)
-    top = d.length(*rg.TABLE_TOP)
+    near = d.length(*d.r.near_side)
+    top = d.length(*d.r.table_top)
     if shape == "box":
         size = [d.length(*rg.BOX_SIDE), d.length(*rg.BOX_SIDE), d.length(*rg.BOX_SIDE, step=0.002)]
         depth, across, half_h = size[0], size[1], size[2] / 2
@@ -220,8 +236,8 @@ def target(
     the direction when given). A conveyor (belt CONVEYOR_SPEED, along or across the
     direction) is made long enough that an object `extent` long placed on it at its near
     point stays on the belt for `travel` seconds (the time from the drop's start to `end`)."""
-    edge = d.length(*rg.TARGET_NEAR_EDGE)
-    top = d.length(*rg.TABLE_TOP)
+    edge = d.length(*d.r.target_near_edge)
+    top = d.length(*d.r.table_top)
     lo, hi = rg.FIXTURE_SIDE
     spec: Doc = {"kind": kind}
     if kind != "conveyor":

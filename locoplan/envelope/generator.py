@@ -1,7 +1,10 @@
 """Seeded task scripts over issue 12's envelope, one family at a time or as a mixed suite.
 
 `generate(family, rng, index)` draws one script of a family; `generate_suite(n, seed)` draws
-`n` scripts mixing the families in SUITE_SHARES, deterministically for a seed. Every script
+`n` scripts mixing the families in SUITE_SHARES, deterministically for a seed. Both draw
+HECTOR's envelope unless given another robot's ranges (`ranges.envelope_ranges(robot)`:
+heights, distances, masses and gait limits at that robot's scale); its scripts then say
+`robot: <name>`. Every script
 is YAML of format version 1 with `expect: {no_fall: true, max_torque_ratio: 1.0}` (and
 `placed` for the families that place an object), a `gait`, an `end` 1 s after its last task,
 and a scene in which nothing overlaps: see the family modules (`transfer`, `carry`,
@@ -29,7 +32,9 @@ import numpy as np
 from locoplan.envelope.carry import side_carry, standing_hold, walk_carry
 from locoplan.envelope.compose import Doc, Draw, NoLayout, script_text
 from locoplan.envelope.motion import locomotion, throw
+from locoplan.envelope.ranges import HECTOR_RANGES, EnvelopeRanges, envelope_ranges
 from locoplan.envelope.transfer import transfer
+from locoplan.scenario.model import Scenario
 
 Family = Callable[[Draw, str], Doc]
 
@@ -69,21 +74,40 @@ class GeneratedScript:
     text: str
 
 
-def generate(family: str, rng: np.random.Generator, index: int) -> GeneratedScript:
-    """Draw one script of `family` (one of FAMILIES) from `rng`, named `<family>-<index>`."""
+def generate(
+    family: str,
+    rng: np.random.Generator,
+    index: int,
+    ranges: EnvelopeRanges = HECTOR_RANGES,
+) -> GeneratedScript:
+    """Draw one script of `family` (one of FAMILIES) from `rng`, named `<family>-<index>`,
+    over `ranges` (HECTOR's unless given)."""
     try:
         build = _FAMILIES[family]
     except KeyError:
         raise ValueError(f"unknown family {family!r}; known: {', '.join(FAMILIES)}") from None
     name = f"{family}-{index:03d}"
-    draw = Draw(rng)
+    draw = Draw(rng, ranges)
     for _ in range(MAX_ATTEMPTS):
         try:
             doc = build(draw, name)
         except NoLayout:
             continue
-        return GeneratedScript(name, family, script_text(doc))
+        return GeneratedScript(name, family, script_text(_with_robot(doc, ranges.robot)))
     raise RuntimeError(f"no {family} layout found in {MAX_ATTEMPTS} draws")
+
+
+def _with_robot(doc: Doc, robot: str) -> Doc:
+    """The script with `robot: <robot>` after its description, unless `robot` is the format's
+    default robot (whose scripts say nothing)."""
+    if robot == Scenario.model_fields["robot"].default:
+        return doc
+    out: Doc = {}
+    for key, value in doc.items():
+        out[key] = value
+        if key == "description":
+            out["robot"] = robot
+    return out
 
 
 def suite_counts(n: int, families: Sequence[str]) -> dict[str, int]:
@@ -117,11 +141,14 @@ def _interleave(counts: dict[str, int]) -> list[str]:
 
 
 def generate_suite(
-    n: int, seed: int, families: Sequence[str] | None = None
+    n: int, seed: int, families: Sequence[str] | None = None, robot: str | None = None
 ) -> list[GeneratedScript]:
     """`n` scripts mixing `families` (default all) in SUITE_SHARES, each family at least
-    once when n allows. The k-th script of a family is drawn from its own generator seeded
-    with (seed, family, k), so it stays the same when `n` or the other families change."""
+    once when n allows, for `robot` (a robot name or robot.yaml path: `envelope_ranges`;
+    None: HECTOR's table as written). The k-th script of a family is drawn from its own
+    generator seeded with (seed, family, k), so it stays the same when `n` or the other
+    families change."""
+    ranges = HECTOR_RANGES if robot is None else envelope_ranges(robot)
     chosen = list(families) if families else list(FAMILIES)
     for f in chosen:
         if f not in _FAMILIES:
@@ -134,5 +161,5 @@ def generate_suite(
         k = seen[family]
         seen[family] += 1
         rng = np.random.default_rng([seed, FAMILIES.index(family), k])
-        scripts.append(generate(family, rng, k))
+        scripts.append(generate(family, rng, k, ranges))
     return scripts

@@ -16,15 +16,15 @@ from locoplan.envelope.compose import (
     NoLayout,
     end_after,
     expectations,
+    fits,
     rect_of,
     rl,
     rt,
     table_with_object,
     turn_limit_deg,
+    walk_limit,
     within_gait,
 )
-from locoplan.envelope.geometry import layout_ok
-from locoplan.scenario.feasibility import walk_speed_limit
 
 # Odds of each locomotion task kind.
 LOCO_KINDS = (("walk", 0.45), ("turn", 0.35), ("step", 0.20))
@@ -38,12 +38,12 @@ def _loco_task(d: Draw, kind: str, period: float) -> Doc:
         length = math.hypot(dx, dy)
         task: Doc = {"action": "walk", "distance": [dx, dy]}
         angle = d.sign() * d.angle(*rg.LOCO_WALK_ANGLE) if d.chance(0.5) else 0.0
-        duration = d.duration(length, rg.LOCO_WALK_SPEED, period, walk_speed_limit(period))
+        duration = d.duration(length, rg.LOCO_WALK_SPEED, period, walk_limit(d, period))
         if angle:
             task["angle"] = angle
             while abs(angle) / duration > rg.LOCO_TURN_RATE:
                 duration = rt(duration + 0.01)
-            duration = within_gait(duration, angle, turn_limit_deg(period))
+            duration = within_gait(duration, angle, turn_limit_deg(d, period))
         task["duration"] = duration
         return task
     if kind == "turn":
@@ -51,7 +51,7 @@ def _loco_task(d: Draw, kind: str, period: float) -> Doc:
         return {
             "action": "turn",
             "angle": angle,
-            "duration": d.duration(angle, rg.LOCO_TURN_RATE, period, turn_limit_deg(period)),
+            "duration": d.duration(angle, rg.LOCO_TURN_RATE, period, turn_limit_deg(d, period)),
         }
     return {"action": "step", "duration": d.time(rg.LOCO_STEP[0], rg.LOCO_STEP[1])}
 
@@ -93,7 +93,7 @@ def throw(d: Draw, name: str) -> Doc:
     scripts step in place meanwhile, from 0.2-0.6 s before the throw to 0-0.5 s after it
     (throw.yaml: 0.5 s before, 0.1 s after)."""
     gait = d.manip_gait()
-    mass = d.mass(rg.THROW_MASS)
+    mass = d.mass(d.r.throw_mass)
     velocity = [
         d.speed(*rg.THROW_VX),
         d.speed(*rg.THROW_VY),
@@ -112,7 +112,7 @@ def throw(d: Draw, name: str) -> Doc:
     throw_task = {"action": "throw", "object": "ball", "velocity": velocity}
     tasks.append({**throw_task, "start": start, "duration": duration})
     placed = table_with_object(d, (0.0, 0.0), 0.0, mass, shape="sphere")
-    if not layout_ok([rect_of(placed.table)], [(0.0, 0.0)], [rect_of(placed.obj)]):
+    if not fits(d, [rect_of(placed.table)], [(0.0, 0.0)], [rect_of(placed.obj)]):
         raise NoLayout("table on the robot")
     how = "while stepping" if stepping else "standing"
     return {

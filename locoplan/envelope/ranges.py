@@ -1,4 +1,5 @@
-"""The envelope the generator draws from: issue 12's table, one constant per range.
+"""The envelope the generator draws from: issue 12's table, one constant per range (HECTOR's),
+and `envelope_ranges(robot)`, the ranges that depend on the robot at another robot's scale.
 
 Every range here is inclusive and drawn uniformly on a grid (times 0.01 s, lengths 1 mm,
 angles 0.1 deg, masses 0.01 kg). Where issue 12 gives only an upper bound on a rate ("at up
@@ -9,6 +10,13 @@ up to 0.01 s (so the rate never exceeds the maximum), and never shorter than one
 """
 
 from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+from locoplan.envelope.geometry import ROBOT_RADIUS
+from locoplan.plan.constants import HIP_YAW_RANGE, WALK_STRIDE
 
 Range = tuple[float, float]
 
@@ -79,3 +87,116 @@ THROW_VY: Range = (-0.3, 0.3)  # m/s, sideways
 THROW_VZ: Range = (0.5, 1.5)  # m/s, up
 THROW_DURATION: Range = (0.8, 1.5)  # s (throw.yaml: 1.0)
 THROW_DELAY: Range = (0.3, 1.0)  # s, from the pick's end to the throw's start
+
+
+# --- per robot ---------------------------------------------------------------------------------
+@dataclass(frozen=True, slots=True)
+class EnvelopeRanges:
+    """The ranges that depend on the robot, for one robot (`envelope_ranges`); the defaults
+    are HECTOR's, the constants above, which the issue's table was written for.
+
+    `robot`: the robot's name, written into each script unless it is the format's default
+    robot; heights and distances (m): `table_top`, `near_side`, `target_near_edge`,
+    `robot_radius` (the disc around the trunk axis nothing may come nearer to, on the
+    robot's path: `locoplan.envelope.geometry.ROBOT_RADIUS` for HECTOR); masses (kg):
+    `transfer_mass`, `walk_carry_mass`, `side_mass`, `hold_mass`, `throw_mass`; gait
+    limits: `walk_stride` (m) and `hip_yaw_range` (rad), those of the feasibility check
+    (`locoplan.scenario.feasibility`) that durations are stretched to meet."""
+
+    robot: str = "hector"
+    table_top: Range = TABLE_TOP
+    near_side: Range = NEAR_SIDE
+    target_near_edge: Range = TARGET_NEAR_EDGE
+    robot_radius: float = ROBOT_RADIUS
+    transfer_mass: Range = TRANSFER_MASS
+    walk_carry_mass: Range = WALK_CARRY_MASS
+    side_mass: Range = SIDE_MASS
+    hold_mass: Range = HOLD_MASS
+    throw_mass: Range = THROW_MASS
+    walk_stride: float = WALK_STRIDE
+    hip_yaw_range: float = HIP_YAW_RANGE
+
+
+HECTOR_RANGES = EnvelopeRanges()
+
+# The robot the issue's table was written for: another robot's ranges are HECTOR's moved and
+# scaled by how it differs from HECTOR (`envelope_ranges`).
+REFERENCE_ROBOT = "hector"
+
+
+def envelope_ranges(robot: str = REFERENCE_ROBOT) -> EnvelopeRanges:
+    """The envelope for `robot` (a name under robots/ or a robot.yaml path): HECTOR's ranges
+    moved to the robot's scale, from its description (`locoplan.plan.robot_geometry.
+    plan_geometry`) and its static analysis (`locoplan.plan.statics`). For HECTOR every
+    shift below is 0 and every ratio 1, so its ranges are the constants above exactly.
+
+    - heights (TABLE_TOP): shifted by how much higher the robot's default hands stand above
+      the soles (trunk height + the default hand pose's z) than HECTOR's (0.55 m): the
+      tables keep their height relative to where the hands rest (H1: +0.522 m, tops
+      0.922-1.072 m; its tuck, 0.870 m at the sphere's top, stays below them);
+    - distances from the trunk axis (NEAR_SIDE, TARGET_NEAR_EDGE, ROBOT_RADIUS): shifted by
+      how much farther the robot's feet reach from the start position (the feasibility
+      check's footprint radius, hypot(toe, stance / 2)) than HECTOR's (0.135 m): objects and
+      targets keep HECTOR's margin outside the feet (H1: +0.112 m, objects' near side
+      0.312-0.392 m);
+    - masses (every family's): the upper bound scaled by the payload the robot holds
+      statically at its carry pose (CARRY_FORWARD ahead at CARRY_HEIGHT, the hands at the
+      default pose's width) over HECTOR's (20.7 kg at its hip pitch; H1: 13.0 kg at its
+      elbows, ratio 0.63: standing holds up to 8.8 kg); the lower bound stays;
+    - gait limits: the robot's walk stride and hip yaw range (robot.yaml `planner`).
+
+    Durations, rates, turn angles, walk distances, box and fixture sizes, throw velocities
+    are the table's for every robot (the rates are bounded by the robot's gait limits
+    anyway). Computed once per robot per process (the static analysis takes about 0.1 s)."""
+    return _envelope_ranges(robot)
+
+
+@functools.cache
+def _envelope_ranges(robot: str) -> EnvelopeRanges:
+    from locoplan.plan.robot_geometry import plan_geometry
+    from locoplan.robot.description import load_robot_description
+
+    geo = plan_geometry(load_robot_description(robot))
+    ref = plan_geometry(load_robot_description(REFERENCE_ROBOT))
+    lift = (geo.base_height + geo.hand_default_in_trunk[2]) - (
+        ref.base_height + ref.hand_default_in_trunk[2]
+    )
+    out = geo.footprint_radius - ref.footprint_radius
+    ratio = carry_payload_limit(robot) / carry_payload_limit(REFERENCE_ROBOT)
+
+    def shifted(r: Range, by: float) -> Range:
+        return (round(r[0] + by, 3), round(r[1] + by, 3))
+
+    def scaled(r: Range) -> Range:
+        return (r[0], max(r[0], math.floor(r[1] * ratio * 100.0 + 1e-9) / 100.0))
+
+    return EnvelopeRanges(
+        robot=robot,
+        table_top=shifted(TABLE_TOP, lift),
+        near_side=shifted(NEAR_SIDE, out),
+        target_near_edge=shifted(TARGET_NEAR_EDGE, out),
+        robot_radius=round(ROBOT_RADIUS + out, 3),
+        transfer_mass=scaled(TRANSFER_MASS),
+        walk_carry_mass=scaled(WALK_CARRY_MASS),
+        side_mass=scaled(SIDE_MASS),
+        hold_mass=scaled(HOLD_MASS),
+        throw_mass=scaled(THROW_MASS),
+        walk_stride=geo.walk_stride,
+        hip_yaw_range=geo.hip_yaw_range,
+    )
+
+
+def carry_payload_limit(robot: str) -> float:
+    """The mass (kg) `robot` holds statically, standing, with its hands CARRY_FORWARD ahead
+    of the trunk origin at CARRY_HEIGHT and as wide apart as its default hand pose, its
+    pelvis shifted to balance (`locoplan.plan.statics.StaticModel.analyse`)."""
+    from locoplan.plan.constants import CARRY_HEIGHT
+    from locoplan.plan.robot_geometry import plan_geometry
+    from locoplan.plan.statics import HeldPose, static_model
+    from locoplan.robot.description import load_robot_description
+
+    geo = plan_geometry(load_robot_description(robot))
+    y = geo.hand_default_in_trunk[1]
+    hands = ((geo.carry_forward, y, CARRY_HEIGHT), (geo.carry_forward, -y, CARRY_HEIGHT))
+    pose = HeldPose(geo.base_height, (0, 1), hands)
+    return float(static_model(robot).analyse(pose, 0.0).payload_limit)

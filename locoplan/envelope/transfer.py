@@ -14,6 +14,7 @@ from locoplan.envelope.compose import (
     NoLayout,
     end_after,
     expectations,
+    fits,
     rect_of,
     rt,
     table_with_object,
@@ -21,7 +22,6 @@ from locoplan.envelope.compose import (
     turn_limit_deg,
     wrap_deg,
 )
-from locoplan.envelope.geometry import layout_ok
 
 GEOMETRY_TRIES = 20
 
@@ -33,13 +33,13 @@ def transfer(d: Draw, name: str) -> Doc:
     sign = d.sign()
     turn1 = sign * d.angle(*rg.TRANSFER_TURN1)
     turn2 = -sign * d.angle(*rg.TRANSFER_TURN2)
-    t1, d1 = 0.0, d.duration(turn1, rg.TRANSFER_TURN_RATE, period, turn_limit_deg(period))
+    t1, d1 = 0.0, d.duration(turn1, rg.TRANSFER_TURN_RATE, period, turn_limit_deg(d, period))
     t1_end = rt(t1 + d1)
     pick = d.time(t1 + d1 / 2, t1_end)
     pick_d = d.time(*rg.PICK_DURATION)
     pick_end = rt(pick + pick_d)
     t2 = max(t1_end, pick_end)
-    d2 = d.duration(turn2, rg.TRANSFER_TURN_RATE, period, turn_limit_deg(period))
+    d2 = d.duration(turn2, rg.TRANSFER_TURN_RATE, period, turn_limit_deg(d, period))
     t2_end = rt(t2 + d2)
     drop = d.time(t2 + d2 / 2, t2_end)
     drop_d = d.time(*rg.DROP_DURATION)
@@ -50,7 +50,7 @@ def transfer(d: Draw, name: str) -> Doc:
         {"action": "drop", "object": "parcel", "onto": "TARGET", "start": drop, "duration": drop_d},
     ]
     end = end_after(tasks)
-    mass = d.mass(rg.TRANSFER_MASS)
+    mass = d.mass(d.r.transfer_mass)
     yaw1, yaw2 = wrap_deg(turn1), wrap_deg(turn1 + turn2)
     kind = d.choice(("platform", "conveyor"))
     for _ in range(GEOMETRY_TRIES):
@@ -58,8 +58,8 @@ def transfer(d: Draw, name: str) -> Doc:
         extent = max(placed.obj["size"][:2])
         goal = target(d, (0.0, 0.0), yaw2, kind, extent, travel=end - drop)
         fixtures = [rect_of(placed.table), rect_of(goal)]
-        if layout_ok(fixtures, [(0.0, 0.0)], [rect_of(placed.obj)]) and layout_ok(
-            [rect_of(placed.obj), fixtures[1]], [(0.0, 0.0)]
+        if fits(d, fixtures, [(0.0, 0.0)], [rect_of(placed.obj)]) and fits(
+            d, [rect_of(placed.obj), fixtures[1]], [(0.0, 0.0)]
         ):
             break
     else:
