@@ -3,6 +3,11 @@ cannot exist. Each finding is a `LocatedIssue` whose message starts `infeasible 
 says what was measured, the limit, and what would make the script feasible; the loader reports
 them like the format's own errors (file:line:column, exit 2), before anything is simulated.
 
+Every figure of the robot comes from the script's robot (`locoplan.plan.robot_geometry.
+PlanGeometry`: robot.yaml's `planner.walk_stride`, `planner.hip_yaw_range_deg`, `foot.toe`,
+`stance_width`); the derivations below are HECTOR's, whose figures are the defaults (H1:
+stride 0.31 m, hip yaw +-24.6 deg, footprint 0.246 m; docs/robots.md).
+
 Reasons:
 - `rate`: a walk faster, or a turn quicker, than the gait can step it. A foot in stance moves
   relative to the hip by the distance the trunk covers in one stance phase, about one gait
