@@ -1,6 +1,8 @@
 """Plan compiler: scenario -> contact schedule, trunk reference, hand targets and events.
 
-Entry point: `compile_plan(scenario, strategy=None, *, base_height=0.60, foot_width=0.2)`.
+Entry point: `compile_plan(scenario, strategy=None, *, geometry=HECTOR_GEOMETRY)`; the robot's
+figures come in as a `locoplan.plan.robot_geometry.PlanGeometry`
+(`locoplan.sim.robot_plan.compile_robot_plan` builds it from the script's robot).
 """
 
 from locoplan.plan.compiler import STRATEGIES, compile_plan

@@ -25,10 +25,10 @@ from locoplan.compare import (
     fixture_outlines,
     run_variants,
 )
-from locoplan.plan import compile_plan
 from locoplan.report.compare_plots import PlotFile, comparison_titles, plot_traces, trunk_shift
 from locoplan.report.compare_table import object_whereabouts
 from locoplan.scenario import Scenario, load_scenario_file
+from locoplan.sim.robot_plan import compile_robot_plan
 
 RunKind = Literal["strategies", "models", "single"]
 
@@ -309,7 +309,7 @@ def _checks_package_transfer(c: Comparison, scenario: Scenario) -> list[Check]:
             )
         )
     else:
-        planned = compile_plan(scenario, "quasi-static").end_shift
+        planned = compile_robot_plan(scenario, "quasi-static").end_shift
         out.append(
             Check(
                 "dynamic finishes sooner by",
@@ -449,7 +449,7 @@ def _landing_error(
 ) -> tuple[float | None, str]:
     """Horizontal distance (m) from the first floor contact of the thrown object to the
     plan's ballistic landing point, and a note."""
-    target = compile_plan(scenario).object_target(obj)
+    target = compile_robot_plan(scenario).object_target(obj)
     if trace is None or target.position is None or obj not in trace.object_positions:
         return None, "no trace or no planned landing point"
     p = trace.object_positions[obj]
