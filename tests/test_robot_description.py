@@ -14,6 +14,7 @@ from ruamel.yaml import YAML
 from locoplan.exceptions import RobotDescriptionError
 from locoplan.robot.description import (
     ROBOTS_DIR_ENV,
+    PlannerFigures,
     RobotDescription,
     load_robot_description,
     robots_dir,
@@ -235,6 +236,16 @@ def test_optional_fields_default_to_hector(desc: RobotDescription) -> None:
     assert len(desc.torso_joint_indices) == 0
     assert (desc.hand_radius, desc.foot_sphere_radius, desc.stance_width) == (0.02, 0.01, 0.2)
     assert desc.reach is None
+    assert desc.planner == PlannerFigures()
+
+
+def test_a_partial_planner_section_keeps_hector_s_other_figures(tmp_path: Path) -> None:
+    raw = _raw()
+    raw["planner"] = {"walk_stride": 0.25, "hand_default": [0.3, 0.1, 0]}
+    planner = load_robot_description(str(_write(tmp_path, raw))).planner
+    assert (planner.walk_stride, planner.hand_default) == (0.25, (0.3, 0.1, 0.0))
+    assert planner.hand_tuck == PlannerFigures().hand_tuck
+    assert planner.hip_yaw_range == PlannerFigures().hip_yaw_range
 
 
 def _drop_torso(raw: dict) -> None:
@@ -255,6 +266,11 @@ def _torso_twice(raw: dict) -> None:
         (_set(["reach", "nominal"], 0.7), "nominal 0.7 must not exceed max 0.613"),
         (_set(["reach", "shoulders", "L"], "L_clavicle"), "shoulder body 'L_clavicle' missing"),
         (_set(["stance_width"], "wide"), "'stance_width' must be a finite number"),
+        (_set(["planner", "hand_default"], [0.3, 0.2]), "'hand_default' must be a list of three"),
+        (_set(["planner", "hand_tuck"], [0.1, -0.2, 0.0]), "the left hand's y must be positive"),
+        (_set(["planner", "walk_stride"], -0.3), "'walk_stride' must be positive"),
+        (_set(["planner", "throw_stop_offset"], -0.1), "'throw_stop_offset' must not be neg"),
+        (_set(["planner", "hip_yaw_range_deg"], 0), "'hip_yaw_range_deg' must be positive"),
     ],
 )
 def test_bad_h1_files_raise(tmp_path: Path, edit, message: str) -> None:
