@@ -52,13 +52,18 @@ def test_turn_quicker_than_the_hip_yaw_range_allows_is_refused(tmp_path: Path) -
     assert "at least 1.80 s" in msg
 
 
-def test_object_inside_the_robot_is_refused(tmp_path: Path) -> None:
-    text = (
-        HEAD
-        + "objects:\n"
-        + "  box: {shape: box, size: [0.1, 0.1, 0.1], mass: 1, position: [0.05, 0, 0.5]}\n"
+def _standing_by(box: str, fixtures: str = "", head: str = HEAD) -> str:
+    """A script that stands 1 s beside the object `box` (a flow mapping) and `fixtures`."""
+    return (
+        head
+        + f"objects:\n  box: {box}\n"
+        + fixtures
         + "tasks:\n  - {action: stand, start: 0, duration: 1}\n"
     )
+
+
+def test_object_inside_the_robot_is_refused(tmp_path: Path) -> None:
+    text = _standing_by("{shape: box, size: [0.1, 0.1, 0.1], mass: 1, position: [0.05, 0, 0.5]}")
     [msg] = _issues(text, tmp_path)
     assert msg.startswith("5:")
     assert "infeasible (overlap): object 'box' comes within 0.000 m" in msg
@@ -66,12 +71,9 @@ def test_object_inside_the_robot_is_refused(tmp_path: Path) -> None:
 
 
 def test_object_sunk_into_its_table_is_refused_with_the_resting_height(tmp_path: Path) -> None:
-    text = (
-        HEAD
-        + "objects:\n"
-        + "  box: {shape: box, size: [0.2, 0.2, 0.2], mass: 1, position: [0.4, 0, 0.45]}\n"
-        + "fixtures:\n  table: {kind: table, position: [0.5, 0, 0], size: [0.4, 0.6, 0.45]}\n"
-        + "tasks:\n  - {action: stand, start: 0, duration: 1}\n"
+    text = _standing_by(
+        "{shape: box, size: [0.2, 0.2, 0.2], mass: 1, position: [0.4, 0, 0.45]}",
+        "fixtures:\n  table: {kind: table, position: [0.5, 0, 0], size: [0.4, 0.6, 0.45]}\n",
     )
     [msg] = _issues(text, tmp_path)
     assert "infeasible (overlap): object 'box' sits 0.100 m inside fixture 'table'" in msg
@@ -92,11 +94,8 @@ def test_h1_is_checked_against_its_own_legs_and_feet(tmp_path: Path) -> None:
     [msg] = _issues(walk, tmp_path)
     # 0.31 m per 0.4 s period: 0.775 m/s (HECTOR would refuse it already at 0.45 m/s).
     assert "at most 0.775 m/s" in msg and "peaks at 0.9 m/s" in msg
-    near = (
-        head
-        + "objects:\n"
-        + "  box: {shape: box, size: [0.1, 0.1, 0.1], mass: 1, position: [0.25, 0, 0.5]}\n"
-        + "tasks:\n  - {action: stand, start: 0, duration: 1}\n"
+    near = _standing_by(
+        "{shape: box, size: [0.1, 0.1, 0.1], mass: 1, position: [0.25, 0, 0.5]}", head=head
     )
     [msg] = _issues(near, tmp_path)
     assert "comes within 0.200 m of the robot's start position" in msg
