@@ -121,3 +121,34 @@ def wrench5_to_world(yaw: float) -> FloatArray:
     T[0:3, 0:3] = Rz
     T[3:6, 3:5] = Rz[:, 1:3]
     return T
+
+
+def ankle_torque_row(axis_foot: FloatArray, r_sole_from_ankle_foot: FloatArray) -> FloatArray:
+    """Row (5,) on w5 = [Fx', Fy', Fz, My', Mz'] giving the moment of a stance foot's contact
+    wrench about its ankle axis (N m): with the unit axis `axis_foot` (3,) and the sole point
+    relative to a point of the axis `r_sole_from_ankle_foot` (3,) (m), both in the foot's yaw
+    frame, a . (M + r x F) = F . (a x r) + a . M, M = (0, My', Mz'). The ankle joint holds its
+    negative (less the foot's own weight and inertia). Flat foot, axis y, sole d below the
+    axis: [-d, 0, 0, 1, 0], i.e. My' - d Fx'."""
+    a = np.asarray(axis_foot, dtype=float)
+    axr = np.cross(a, np.asarray(r_sole_from_ankle_foot, dtype=float))
+    return np.array([axr[0], axr[1], axr[2], a[1], a[2]])
+
+
+def ankle_row_binds(row: FloatArray, limits: ContactLimits, torque: float) -> bool:
+    """Whether a foot wrench the other rows allow (`wrench_rows`: friction, f_max, the CoP
+    within toe and heel, the torsion bound) can need more than `torque` (N m) about the ankle
+    (`row` from `ankle_torque_row`): an upper bound of |row . w5| over that set,
+    f_max (mu (|r0| + |r1|) + |r2| + |r3| max(toe, heel) + |r4| mu_t), against `torque`.
+
+    HECTOR: 250 N (0.5 x 0.04 + 0.09) = 27.5 N m < 33.5 N m, its foot never asks its ankle
+    for more than it has. H1: 756.4 N (0.5 x 0.07 + 0.14) = 132 N m > 40 N m: a CoP within
+    the foot's 0.14 m toe asks the ankle three times its limit in single support."""
+    r = np.abs(np.asarray(row, dtype=float))
+    bound = limits.f_max * (
+        limits.mu * (r[0] + r[1])
+        + r[2]
+        + r[3] * max(limits.toe, limits.heel)
+        + r[4] * limits.mu_torsion
+    )
+    return bool(bound > torque)

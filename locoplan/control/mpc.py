@@ -146,6 +146,11 @@ class MpcSettings:
     # With mu_torsion: also the centre-of-pressure dependent yaw friction of a line foot
     # (`locoplan.control.contact.yaw_friction_rows`).
     yaw_friction: bool = True
+    # The stance ankle's torque bound on the foot's wrench (`ankle_torque_row`): the row
+    # (5,) on w5 giving the moment about the ankle axis, and the bound (N m). None: no row
+    # (HECTOR: its ankles hold any wrench the other rows allow).
+    ankle_row: tuple[float, float, float, float, float] | None = None
+    ankle_torque: float = np.inf
     backend: str = "daqp"
     formulation: str = "condensed"
     qp: QpSettings = field(default_factory=_default_qp_settings)

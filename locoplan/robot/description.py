@@ -34,6 +34,11 @@ _LENGTH_TOL = 1e-9  # m, N m
 DEFAULT_HAND_RADIUS = 0.02  # m
 DEFAULT_FOOT_SPHERE_RADIUS = 0.01  # m
 DEFAULT_STANCE_WIDTH = 0.2  # m
+# The rigid body of the controller's MPC (robot.yaml `mpc_body`; `locoplan.control.controller.
+# mpc_body_inertia`): "composite", the whole robot's locked-joint inertia at the nominal pose
+# (HECTOR, the default), or "upper-body", the inertia of every body outside the legs about
+# its own centre of mass, the legs' mass lumped at the CoM (H1: docs/robots.md compares them).
+MPC_BODIES = ("composite", "upper-body")
 
 
 def _empty_indices() -> NDArray[np.intp]:
@@ -91,6 +96,7 @@ class RobotDescription:
     foot_sphere_radius: float = DEFAULT_FOOT_SPHERE_RADIUS  # m, the sole spheres' radius
     stance_width: float = DEFAULT_STANCE_WIDTH  # m, lateral distance of the planned footholds
     reach: RobotReach | None = None
+    mpc_body: str = MPC_BODIES[0]  # one of MPC_BODIES
 
     @property
     def n_joints(self) -> int:
@@ -214,6 +220,7 @@ def load_robot_description(name_or_path: str | Path = "hector") -> RobotDescript
         ),
         stance_width=reader.get_positive_or("stance_width", DEFAULT_STANCE_WIDTH),
         reach=reach,
+        mpc_body=reader.get_choice_or("mpc_body", MPC_BODIES),
     )
     if np.any(desc.q_joints_nominal < desc.q_lower) or np.any(desc.q_joints_nominal > desc.q_upper):
         raise nominal_deg.error("nominal joint angles must lie within the joint ranges")
@@ -404,6 +411,15 @@ class _Reader:
     def get_positive_or(self, key: str, default: float) -> float:
         """`get_positive` for an optional key: `default` when absent."""
         return self.get_positive(key) if key in self.node else default
+
+    def get_choice_or(self, key: str, choices: tuple[str, ...]) -> str:
+        """An optional string among `choices`: the first of them when absent."""
+        if key not in self.node:
+            return choices[0]
+        value = self.get_str(key)
+        if value not in choices:
+            raise self.error(f"{key!r} must be one of {list(choices)}, got {value!r}")
+        return value
 
     def get_pair(self, key: str) -> tuple[float, float]:
         value = self._get(key)

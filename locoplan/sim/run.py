@@ -329,6 +329,7 @@ def controller_settings(
     model = options.model or scenario.model
     return ControllerSettings(
         mapping="jacobian" if options.mapping == "jacobian" else "wbc",
+        mpc_body="upper-body" if desc.mpc_body == "upper-body" else "composite",
         model="combined" if model == "combined" else "external-force",
         qp_backend=options.qp_backend,
         mpc=mpc,
