@@ -220,6 +220,7 @@ def test_h1_loads_with_torso_and_four_joint_arms() -> None:
     assert list(h1.torso_joint_indices) == [h1.joint_names.index("torso_yaw")] == [10]
     assert (h1.hand_radius, h1.foot_sphere_radius) == (0.033, 0.014)
     assert h1.stance_width == 0.40572
+    assert h1.mpc_body == "upper-body"
     assert h1.reach is not None
     assert h1.reach.shoulder_bodies == ("L_shoulder_roll_link", "R_shoulder_roll_link")
     assert (h1.reach.max, h1.reach.nominal) == (0.613, 0.458)
@@ -235,6 +236,7 @@ def test_optional_fields_default_to_hector(desc: RobotDescription) -> None:
     assert len(desc.torso_joint_indices) == 0
     assert (desc.hand_radius, desc.foot_sphere_radius, desc.stance_width) == (0.02, 0.01, 0.2)
     assert desc.reach is None
+    assert desc.mpc_body == "composite"
 
 
 def _drop_torso(raw: dict) -> None:
@@ -255,6 +257,7 @@ def _torso_twice(raw: dict) -> None:
         (_set(["reach", "nominal"], 0.7), "nominal 0.7 must not exceed max 0.613"),
         (_set(["reach", "shoulders", "L"], "L_clavicle"), "shoulder body 'L_clavicle' missing"),
         (_set(["stance_width"], "wide"), "'stance_width' must be a finite number"),
+        (_set(["mpc_body"], "legs"), r"'mpc_body' must be one of \['composite', 'upper-body'\]"),
     ],
 )
 def test_bad_h1_files_raise(tmp_path: Path, edit, message: str) -> None:
