@@ -14,7 +14,7 @@ from locoplan.control.controller import (
     ankle_rows,
     mpc_body_inertia,
 )
-from locoplan.control.mpc import MpcSettings
+from locoplan.control.mpc import MpcSettings, force_weights
 from locoplan.control.mpc_terms import wrench_rows
 from locoplan.robot.description import load_robot_description
 from locoplan.robot.pinocchio_model import PinocchioRobot
@@ -69,6 +69,7 @@ def test_mpc_wrench_rows_carry_the_ankle_row() -> None:
         MpcSettings(mu_torsion=0.02, ankle_row=(-0.07, 0, 0, 1, 0), ankle_torque=32.0)
     )
     assert np.array_equal(C[:-1], C0) and np.array_equal(lo[:-1], lo0)
+    assert np.array_equal(hi[:-1], hi0)
     assert np.array_equal(C[-1], [-0.07, 0, 0, 1, 0]) and (lo[-1], hi[-1]) == (-32.0, 32.0)
 
 
@@ -87,3 +88,13 @@ def test_mpc_body_inertia() -> None:
         assert np.all(np.linalg.eigvalsh(I_u) > 0)
     with pytest.raises(ValueError, match="unknown MPC body"):
         mpc_body_inertia(r, desc, "legs")
+
+
+def test_force_weights_scale_with_the_mass() -> None:
+    # HECTOR (17 kg up to 4e-15) gets the default weights themselves; H1 (51.437 kg) those
+    # times (17 / 51.437)^2.
+    hector = load_robot_description("hector")
+    assert force_weights(hector.total_mass) is MpcSettings().r_diag
+    h1 = load_robot_description("h1")
+    k = (17.0 / 51.437) ** 2
+    assert np.allclose(force_weights(h1.total_mass), np.asarray(MpcSettings().r_diag) * k)

@@ -51,6 +51,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from locoplan.control import mpc_kernels, srbd
+from locoplan.control.contact import F_MAX_REFERENCE_MASS
 from locoplan.control.mpc_terms import (
     Kernel,
     StepTerms,
@@ -97,6 +98,26 @@ _DEFAULT_Q: Final = (
     0.0,
 )
 _DEFAULT_R: Final = tuple(1e-4 * w for w in (1, 1, 1, 1, 1, 1, 5, 5, 5, 5))
+
+
+def force_weights(mass: float) -> tuple[float, ...]:
+    """The diagonal of R (10,) for a robot of `mass` (kg): `_DEFAULT_R`, set for HECTOR's
+    17 kg (`F_MAX_REFERENCE_MASS`), times (17 / mass)^2, so that the cost of the
+    forces a robot needs (m g shares) weighs against the state errors as it does on HECTOR.
+    The ratio is rounded to 1e-9 (HECTOR's decimal link masses sum to 4e-15 kg over 17):
+    HECTOR gets `_DEFAULT_R` itself.
+
+    Measured on H1 (51.4 kg, R x 0.109) on its closed-loop scripts (tests/
+    test_h1_closed_loop.py), against HECTOR's R: the pelvis tracks the plan closer, RMS /
+    max 8 / 34 mm instead of 12 / 42 stepping in place, 7 / 20 instead of 10 / 24 side-
+    stepping, 18 / 50 instead of 20 / 53 walking; a 9 N s push moves it 3.3 cm instead of
+    4.7; ankle peaks unchanged (0.81-0.85). The moments' weights scale the same way (a moment
+    is a force times a foot-sized lever, which differs between the two by 17 %, not 3x).
+    The WBC's relaxation weights scaled likewise changed nothing measurable (kept)."""
+    k = round(F_MAX_REFERENCE_MASS / mass, 9)
+    if k == 1.0:
+        return _DEFAULT_R
+    return tuple(w * k * k for w in _DEFAULT_R)
 
 
 def _default_qp_settings() -> QpSettings:
