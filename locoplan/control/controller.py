@@ -30,7 +30,6 @@ from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
-import pinocchio as pin
 
 from locoplan.control import wbc_kernels
 from locoplan.control.contact import ContactLimits, ankle_row_binds, ankle_torque_row
@@ -223,9 +222,10 @@ def _nominal_q(robot: PinocchioRobot, desc: RobotDescription) -> FloatArray:
 
 def mpc_body_inertia(robot: PinocchioRobot, desc: RobotDescription, body: str) -> FloatArray:
     """Rotational inertia (3, 3) (kg m^2, trunk axes = world at the nominal pose) of the MPC's
-    rigid body: "composite", the whole robot's locked-joint inertia about its CoM at the
-    nominal pose; "upper-body", the bodies outside the legs (trunk, torso, arms) about their
-    own CoM, the legs' mass counted only in the body's mass (lumped at the CoM).
+    rigid body, `robot` updated at the nominal pose: "composite", the whole robot's
+    locked-joint inertia about its CoM; "upper-body", the bodies outside the legs (trunk,
+    torso, arms) about their own CoM, the legs' mass counted only in the body's mass (lumped
+    at the CoM).
 
     Why the choice: the MPC's state has the trunk's angular velocity where the centroidal
     dynamics have the whole robot's angular momentum. Locked joints say the legs turn with
@@ -237,43 +237,28 @@ def mpc_body_inertia(robot: PinocchioRobot, desc: RobotDescription, body: str) -
         return np.asarray(robot.composite_inertia_world(), dtype=float)
     if body != "upper-body":
         raise ValueError(f"unknown MPC body {body!r}")
-    model = robot.model
-    data = model.createData()
-    pin.forwardKinematics(model, data, _nominal_q(robot, desc))
-    legs = {
-        model.getJointId(desc.joint_names[int(i)]) for idx in desc.leg_joint_indices for i in idx
-    }
-    upper = pin.Inertia.Zero()
-    for j in range(1, model.njoints):
-        if j not in legs:
-            upper += data.oMi[j].act(model.inertias[j])
-    return np.array(upper.inertia, dtype=float)
+    legs = tuple(desc.joint_names[int(i)] for idx in desc.leg_joint_indices for i in idx)
+    return robot.inertia_without_joints_world(legs)
 
 
 def ankle_rows(robot: PinocchioRobot, desc: RobotDescription) -> tuple[FloatArray, float]:
     """The stance feet's ankle-moment row (5,) (`contact.ankle_torque_row`) and the smaller
     ankle torque limit (N m). The ankle is each leg's last joint (robot.yaml lists a leg hip
-    to ankle); its axis and the sole site come from the model at the nominal pose, in the
-    foot's yaw frame, where they stay while the foot stands flat. The legs are mirror images:
-    rows differing by more than 1e-9 raise ValueError (MpcSettings has one row for all
-    feet)."""
-    model = robot.model
-    data = model.createData()
-    q0 = _nominal_q(robot, desc)
-    pin.computeJointJacobians(model, data, q0)
-    pin.updateFramePlacements(model, data)
+    to ankle); its axis and the sole site come from the model at the nominal pose (`robot`
+    is updated there), in the foot's yaw frame, where they stay while the foot stands flat.
+    The legs are mirror images: rows differing by more than 1e-9 raise ValueError
+    (MpcSettings has one row for all feet)."""
+    robot.update(_nominal_q(robot, desc), np.zeros(robot.nv))
     rows = []
     limits = []
     for leg, foot in zip(desc.leg_joint_indices, desc.foot_frames, strict=True):
-        jid = model.getJointId(desc.joint_names[int(leg[-1])])
-        J = pin.getJointJacobian(model, data, jid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        axis_world = J[3:, model.joints[jid].idx_v]
-        sole = data.oMf[model.getFrameId(foot)]
-        R = sole.rotation
+        ankle = int(leg[-1])
+        origin, axis_world = robot.joint_axis_world(desc.joint_names[ankle])
+        sole = robot.frame_pose(foot)
+        R = sole.R_to_world
         Rz = rot_z(math.atan2(R[1, 0], R[0, 0]))
-        r_world = sole.translation - data.oMi[jid].translation
-        rows.append(ankle_torque_row(Rz.T.dot(axis_world), Rz.T.dot(r_world)))
-        limits.append(float(desc.torque_limits[int(leg[-1])]))
+        rows.append(ankle_torque_row(Rz.T.dot(axis_world), Rz.T.dot(sole.p_world - origin)))
+        limits.append(float(desc.torque_limits[ankle]))
     if not np.allclose(rows[0], rows[1], rtol=0.0, atol=1e-9):
         raise ValueError(f"the legs' ankle rows differ: {rows[0]} vs {rows[1]}")
     return rows[0], min(limits)
