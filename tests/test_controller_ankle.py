@@ -98,3 +98,8 @@ def test_force_weights_scale_with_the_mass() -> None:
     h1 = load_robot_description("h1")
     k = (17.0 / 51.437) ** 2
     assert np.allclose(force_weights(h1.total_mass), np.asarray(MpcSettings().r_diag) * k)
+
+
+def test_ankle_row_needs_a_positive_bound() -> None:
+    with pytest.raises(ValueError, match="ankle_torque > 0"):
+        MpcSettings(ankle_row=(-0.07, 0.0, 0.0, 1.0, 0.0), ankle_torque=0.0)

@@ -9,12 +9,15 @@ constraints are constant rows::
     |Fx'| <= mu Fz,  |Fy'| <= mu Fz                         (friction pyramid, 4 rows)
     -toe Fz <= My' <= heel Fz                               (line-foot CoP, 2 rows)
     |Mz'| <= mu_t Fz                                        (optional torsion, 2 rows)
+    |a . w| <= tau_ankle                                    (optional ankle moment, 1 row)
     f_min <= Fz <= f_max                                    (box)
 
 CoP sign: My' is the moment on the robot about the foot's y axis at the sole point under the
 ankle. A vertical force Fz at x_cop along the foot gives (x_cop, 0, 0) x (0, 0, Fz) =
 (0, -x_cop Fz, 0), so My' = -x_cop Fz and x_cop in [-heel, toe] is -toe Fz <= My' <= heel Fz.
-Toe loading gives a negative My'.
+Toe loading gives a negative My'. The ankle row a (``MpcSettings.ankle_row``) gives the
+wrench's moment about the ankle axis, My' - d Fx' for a sole d below a horizontal axis: on a
+robot whose ankle cannot hold what the CoP bounds allow (H1), it is the tighter bound.
 
 F_ext (Model 2) is not a decision variable: it is known from the plan (-m_o g while held) and
 enters the affine term, so the paper's equality F_ext = [0, 0, m_o g] holds by construction.
@@ -113,7 +116,8 @@ def force_weights(mass: float) -> tuple[float, ...]:
     stepping, 18 / 50 instead of 20 / 53 walking; a 9 N s push moves it 3.3 cm instead of
     4.7; ankle peaks unchanged (0.81-0.85). The moments' weights scale the same way (a moment
     is a force times a foot-sized lever, which differs between the two by 17 %, not 3x).
-    The WBC's relaxation weights scaled likewise changed nothing measurable (kept)."""
+    The WBC's relaxation weights scaled likewise changed nothing measurable and are
+    left as they are."""
     k = round(F_MAX_REFERENCE_MASS / mass, 9)
     if k == 1.0:
         return _DEFAULT_R
@@ -191,6 +195,8 @@ class MpcSettings:
             raise ValueError("MpcSettings: mu, toe and heel must be >= 0")
         if self.mu_torsion is not None and self.mu_torsion < 0:
             raise ValueError("MpcSettings.mu_torsion must be >= 0")
+        if self.ankle_row is not None and not (len(self.ankle_row) == 5 and self.ankle_torque > 0):
+            raise ValueError("MpcSettings.ankle_row needs 5 entries and ankle_torque > 0")
         if self.backend not in BACKENDS:
             raise ValueError(f"unknown MPC backend {self.backend!r}")
         if self.formulation not in FORMULATIONS:
