@@ -1,7 +1,8 @@
 """H1 under locoplan's own controller (MPC + WBC) in MuJoCo, asserted from the simulation
 state with HECTOR's tolerances (tests/test_closed_loop.py): issue 14's closed loop. H1
 stands, steps in place, survives a lateral push scaled to its mass, walks forward and
-sideways and turns in place (docs/robots.md, "What works for H1").
+sideways, turns in place, walks while turning and closes scenarios/walk-square.yaml
+(docs/robots.md, "What works for H1").
 
 Positions and yaw come from MuJoCo's free joint (the record samples `data.qpos` every
 10 ms), torques from what MuJoCo's actuators applied. Beyond HECTOR's checks, the ankles
@@ -25,8 +26,9 @@ from locoplan.sim.run import RunOptions, RunResult, run_scenario
 
 pytestmark = pytest.mark.closed_loop
 
+ROOT = Path(__file__).resolve().parents[1]
 # The ankles' peak may reach this share of their limit. The MPC plans them to 0.8
-# (ANKLE_TORQUE_SHARE); measured 0.81-0.85 on the scripts below, 1.00 without the bound.
+# (ANKLE_TORQUE_SHARE); measured 0.81-0.87 on the scripts below, 1.00 without the bound.
 ANKLE_PEAK_SHARE = 0.9
 
 H1_STAND = """\
@@ -189,4 +191,35 @@ def test_h1_turns_ninety_degrees_in_place(tmp_path: Path) -> None:
     assert not result.metrics["fell"]
     assert abs(math.degrees(yaw[-1]) - 90.0) < 5.0
     assert np.linalg.norm(pos[-1, :2]) < 0.05
+    _torques_within_limits(result, desc)
+
+
+def test_h1_walks_while_turning(tmp_path: Path) -> None:
+    desc = load_robot_description("h1")
+    text = (
+        "version: 1\nname: h1-walk-turn\nrobot: h1\n"
+        "tasks:\n  - {action: walk, distance: [0.6, 0.0], angle: 60, start: 0.3, duration: 2.4}\n"
+        "end: 3.5\n"
+    )
+    result = _run(tmp_path, text)
+    _, pos, yaw = _trajectory(result)
+    assert not result.metrics["fell"]
+    assert abs(pos[-1, 0] - 0.6) < 0.10
+    assert abs(pos[-1, 1]) < 0.10
+    assert abs(math.degrees(yaw[-1]) - 60.0) < 5.0
+    _torques_within_limits(result, desc)
+
+
+def test_h1_walk_square_closes(tmp_path: Path) -> None:
+    # scenarios/walk-square.yaml (four 0.5 m walks, four 90 deg turns, 17.3 s) with H1:
+    # measured 0.4 cm from the start, yaw 360.0 deg, ankles 0.87 of their limit.
+    desc = load_robot_description("h1")
+    text = (ROOT / "scenarios" / "walk-square.yaml").read_text()
+    text = text.replace("name: walk-square\n", "name: h1-walk-square\nrobot: h1\n", 1)
+    assert "robot: h1" in text
+    result = _run(tmp_path, text)
+    _, pos, yaw = _trajectory(result)
+    assert not result.metrics["fell"]
+    assert np.linalg.norm(pos[-1, :2]) < 0.10
+    assert abs(math.degrees(yaw[-1]) - 360.0) < 5.0
     _torques_within_limits(result, desc)
