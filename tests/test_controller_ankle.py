@@ -6,7 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from locoplan.control.contact import ContactLimits, ankle_row_binds, ankle_torque_row
+from locoplan.control.contact import (
+    ContactLimits,
+    ankle_row_binds,
+    ankle_torque_row,
+    torsion_bound,
+)
 from locoplan.control.controller import (
     ANKLE_TORQUE_SHARE,
     ControllerSettings,
@@ -103,3 +108,10 @@ def test_force_weights_scale_with_the_mass() -> None:
 def test_ankle_row_needs_a_positive_bound() -> None:
     with pytest.raises(ValueError, match="ankle_torque > 0"):
         MpcSettings(ankle_row=(-0.07, 0.0, 0.0, 1.0, 0.0), ankle_torque=0.0)
+
+
+def test_torsion_bound_scales_with_the_foot_length() -> None:
+    # HECTOR's 0.09 + 0.06 m foot gets 0.02 m exactly (ContactLimits' default); H1's
+    # 0.14 + 0.035 m foot 0.02 x 0.175 / 0.15.
+    assert torsion_bound(0.09, 0.06) == ContactLimits().mu_torsion == 0.02
+    assert abs(torsion_bound(0.14, 0.035) - 0.02 * 0.175 / 0.15) < 1e-10

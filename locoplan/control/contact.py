@@ -37,6 +37,30 @@ def foot_force_max(mass: float) -> float:
     return round(F_MAX_REFERENCE * mass / F_MAX_REFERENCE_MASS, 3)
 
 
+# HECTOR's torsion bound and the foot length (toe + heel) it was set for (m): |Mz'| <= 0.02 Fz
+# on a 0.15 m line foot. Another robot gets the same share of its foot's length
+# (`torsion_bound`).
+MU_TORSION_REFERENCE = 0.02  # m
+FOOT_LENGTH_REFERENCE = 0.15  # m
+
+
+def torsion_bound(toe: float, heel: float) -> float:
+    """The torsion bound mu_t (m; |Mz'| <= mu_t Fz) of a line foot reaching `toe` ahead of
+    and `heel` behind its sole site (m): HECTOR's 0.02 m times the foot length over its
+    0.15 m. The ratio is rounded to 1e-9, so HECTOR's 0.09 + 0.06 gives 0.02 exactly.
+
+    Why it scales: the yaw moment a line foot holds by friction grows with the distance
+    between its contact points (`yaw_friction_rows`: mu L Fz / 2 at most). Measured on H1
+    (foot 0.175 m: 0.0233 m) on its closed-loop scripts against 0.02: in the walk square's
+    first turn the trunk fell 4 deg behind its yaw reference in single support and, catching
+    up with the yaw moment 0.02 allowed, a stance foot pivoted ~9 deg and took the right hip
+    yaw 1.0 deg past its +-24.6 deg range for 0.13 s (25.6 deg); with 0.0233 the hip yaw
+    peaks at 23.1 deg, within its range, and the other scripts track as before or 1-5 mm
+    closer."""
+    k = round((toe + heel) / FOOT_LENGTH_REFERENCE, 9)
+    return MU_TORSION_REFERENCE if k == 1.0 else MU_TORSION_REFERENCE * k
+
+
 @dataclass(frozen=True, slots=True)
 class ContactLimits:
     """Friction coefficient, vertical force bounds (N), foot lengths ahead/behind the ankle (m),
@@ -47,7 +71,7 @@ class ContactLimits:
     f_max: float = 250.0
     toe: float = 0.09
     heel: float = 0.06
-    mu_torsion: float = 0.02
+    mu_torsion: float = MU_TORSION_REFERENCE
     # The centre-of-pressure dependent yaw friction rows (`yaw_friction_rows`); False gives
     # the QP as it was before them (the recorded-solution tests).
     yaw_friction: bool = True

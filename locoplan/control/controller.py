@@ -317,9 +317,10 @@ class ControllerSettings:
     Tried on H1 and not kept, each scaled from HECTOR by H1's size: `swing_height` x 0.98 /
     0.60 = 0.13 m (pitch RMS stepping 0.58 -> 0.84 deg, walking 0.81 -> 0.98 deg, the
     pelvis 18 -> 29 mm RMS from the plan while walking: the heavy swing leg lifted higher
-    shakes the trunk more), `raibert_gain` x sqrt(0.98 / 0.60) = 0.064 s and `mu_torsion` x
-    0.175 / 0.15 = 0.023 m (both within 1 mm RMS and 0.01 deg of HECTOR's values on every
-    script). So they stay, checked over that range of sizes."""
+    shakes the trunk more) and `raibert_gain` x sqrt(0.98 / 0.60) = 0.064 s (within 1 mm RMS
+    and 0.01 deg of HECTOR's value on every script). So they stay, checked over that range
+    of sizes. (The torsion bound does scale, with the foot's length: `contact.torsion_
+    bound`.)"""
 
     mpc_period: float = 0.01
     mapping: Literal["wbc", "jacobian"] = "wbc"

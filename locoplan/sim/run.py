@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from locoplan import interrupt
-from locoplan.control.contact import ContactLimits, foot_force_max
+from locoplan.control.contact import ContactLimits, foot_force_max, torsion_bound
 from locoplan.control.controller import ControllerSettings
 from locoplan.control.mpc import MpcSettings, force_weights
 from locoplan.exceptions import LocoplanError
@@ -309,11 +309,15 @@ def controller_settings(
     """Controller settings from the script (`mpc`, `model`), the run options and the robot
     (`desc`, else the script's): the feet's support segment (robot.yaml `foot`) bounds the
     centre of pressure, the normal-force bound per foot and the MPC's force weights scale
-    with the robot's mass (`foot_force_max`, HECTOR's 250 N; `mpc.force_weights`), the MPC's
+    with the robot's mass (`foot_force_max`, HECTOR's 250 N; `mpc.force_weights`), the
+    torsion bound with the foot's length (`torsion_bound`, HECTOR's 0.02 m), the MPC's
     rigid body is robot.yaml's `mpc_body`."""
     desc = desc if desc is not None else load_robot_description(scenario.robot)
     limits = ContactLimits(
-        f_max=foot_force_max(desc.total_mass), toe=desc.foot_toe, heel=desc.foot_heel
+        f_max=foot_force_max(desc.total_mass),
+        toe=desc.foot_toe,
+        heel=desc.foot_heel,
+        mu_torsion=torsion_bound(desc.foot_toe, desc.foot_heel),
     )
     if options.f_min is not None:
         limits = replace(limits, f_min=options.f_min)
