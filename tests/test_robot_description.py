@@ -221,6 +221,7 @@ def test_h1_loads_with_torso_and_four_joint_arms() -> None:
     assert list(h1.torso_joint_indices) == [h1.joint_names.index("torso_yaw")] == [10]
     assert (h1.hand_radius, h1.foot_sphere_radius) == (0.033, 0.014)
     assert h1.stance_width == 0.40572
+    assert h1.mpc_body == "upper-body"
     assert h1.reach is not None
     assert h1.reach.shoulder_bodies == ("L_shoulder_roll_link", "R_shoulder_roll_link")
     assert (h1.reach.max, h1.reach.nominal) == (0.613, 0.458)
@@ -236,6 +237,7 @@ def test_optional_fields_default_to_hector(desc: RobotDescription) -> None:
     assert len(desc.torso_joint_indices) == 0
     assert (desc.hand_radius, desc.foot_sphere_radius, desc.stance_width) == (0.02, 0.01, 0.2)
     assert desc.reach is None
+    assert desc.mpc_body == "composite"
     assert desc.planner == PlannerFigures()
 
 
@@ -271,6 +273,7 @@ def _torso_twice(raw: dict) -> None:
         (_set(["planner", "walk_stride"], -0.3), "'walk_stride' must be positive"),
         (_set(["planner", "throw_stop_offset"], -0.1), "'throw_stop_offset' must not be neg"),
         (_set(["planner", "hip_yaw_range_deg"], 0), "'hip_yaw_range_deg' must be positive"),
+        (_set(["mpc_body"], "legs"), r"'mpc_body' must be one of \['composite', 'upper-body'\]"),
     ],
 )
 def test_bad_h1_files_raise(tmp_path: Path, edit, message: str) -> None:

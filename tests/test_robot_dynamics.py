@@ -23,6 +23,7 @@ import pinocchio as pin
 import pytest
 from numpy.typing import NDArray
 
+from locoplan.exceptions import RobotDescriptionError
 from locoplan.robot import conventions as cv
 from locoplan.robot.description import RobotDescription, load_robot_description
 from locoplan.robot.mujoco_model import load_mujoco_model, nominal_qpos
@@ -300,3 +301,20 @@ def test_frames_kinematics_stacks_the_single_frame_accessors(
             assert np.array_equal(R[i], robot.frame_rotation(name))
             assert np.array_equal(J[i], robot.frame_jacobian(name))
             assert np.array_equal(dJv[i], robot.frame_jdot_v(name))
+
+
+def test_partial_inertia_and_joint_axes() -> None:
+    """`inertia_without_joints_world` with no joint left out is the composite inertia; a
+    hinge's axis is a unit vector in the world (HECTOR's and H1's ankles: +y at the nominal
+    pose, 1e-12: round-off of the kinematics). Unknown joints raise."""
+    for name in ("hector", "h1"):
+        d = load_robot_description(name)
+        r = PinocchioRobot(d)
+        assert np.allclose(r.inertia_without_joints_world(()), r.composite_inertia_world())
+        for leg in d.leg_joint_indices:
+            _, axis = r.joint_axis_world(d.joint_names[int(leg[-1])])
+            assert np.allclose(axis, [0.0, 1.0, 0.0], atol=1e-12)
+        with pytest.raises(RobotDescriptionError):
+            r.joint_axis_world("tail")
+        with pytest.raises(RobotDescriptionError):
+            r.inertia_without_joints_world(("tail",))

@@ -37,6 +37,30 @@ def foot_force_max(mass: float) -> float:
     return round(F_MAX_REFERENCE * mass / F_MAX_REFERENCE_MASS, 3)
 
 
+# HECTOR's torsion bound and the foot length (toe + heel) it was set for (m): |Mz'| <= 0.02 Fz
+# on a 0.15 m line foot. Another robot gets the same share of its foot's length
+# (`torsion_bound`).
+MU_TORSION_REFERENCE = 0.02  # m
+FOOT_LENGTH_REFERENCE = 0.15  # m
+
+
+def torsion_bound(toe: float, heel: float) -> float:
+    """The torsion bound mu_t (m; |Mz'| <= mu_t Fz) of a line foot reaching `toe` ahead of
+    and `heel` behind its sole site (m): HECTOR's 0.02 m times the foot length over its
+    0.15 m. The ratio is rounded to 1e-9, so HECTOR's 0.09 + 0.06 gives 0.02 exactly.
+
+    Why it scales: the yaw moment a line foot holds by friction grows with the distance
+    between its contact points (`yaw_friction_rows`: mu L Fz / 2 at most). Measured on H1
+    (foot 0.175 m: 0.0233 m) on its closed-loop scripts against 0.02: in the walk square's
+    first turn the trunk fell 4 deg behind its yaw reference in single support and, catching
+    up with the yaw moment 0.02 allowed, a stance foot pivoted ~9 deg and took the right hip
+    yaw 1.0 deg past its +-24.6 deg range for 0.13 s (25.6 deg); with 0.0233 the hip yaw
+    peaks at 23.1 deg, within its range, and the other scripts track as before or 1-5 mm
+    closer."""
+    k = round((toe + heel) / FOOT_LENGTH_REFERENCE, 9)
+    return MU_TORSION_REFERENCE if k == 1.0 else MU_TORSION_REFERENCE * k
+
+
 @dataclass(frozen=True, slots=True)
 class ContactLimits:
     """Friction coefficient, vertical force bounds (N), foot lengths ahead/behind the ankle (m),
@@ -47,7 +71,7 @@ class ContactLimits:
     f_max: float = 250.0
     toe: float = 0.09
     heel: float = 0.06
-    mu_torsion: float = 0.02
+    mu_torsion: float = MU_TORSION_REFERENCE
     # The centre-of-pressure dependent yaw friction rows (`yaw_friction_rows`); False gives
     # the QP as it was before them (the recorded-solution tests).
     yaw_friction: bool = True
@@ -121,3 +145,34 @@ def wrench5_to_world(yaw: float) -> FloatArray:
     T[0:3, 0:3] = Rz
     T[3:6, 3:5] = Rz[:, 1:3]
     return T
+
+
+def ankle_torque_row(axis_foot: FloatArray, r_sole_from_ankle_foot: FloatArray) -> FloatArray:
+    """Row (5,) on w5 = [Fx', Fy', Fz, My', Mz'] giving the moment of a stance foot's contact
+    wrench about its ankle axis (N m): with the unit axis `axis_foot` (3,) and the sole point
+    relative to a point of the axis `r_sole_from_ankle_foot` (3,) (m), both in the foot's yaw
+    frame, a . (M + r x F) = F . (a x r) + a . M, M = (0, My', Mz'). The ankle joint holds its
+    negative (less the foot's own weight and inertia). Flat foot, axis y, sole d below the
+    axis: [-d, 0, 0, 1, 0], i.e. My' - d Fx'."""
+    a = np.asarray(axis_foot, dtype=float)
+    axr = np.cross(a, np.asarray(r_sole_from_ankle_foot, dtype=float))
+    return np.array([axr[0], axr[1], axr[2], a[1], a[2]])
+
+
+def ankle_row_binds(row: FloatArray, limits: ContactLimits, torque: float) -> bool:
+    """Whether a foot wrench the other rows allow (`wrench_rows`: friction, f_max, the CoP
+    within toe and heel, the torsion bound) can need more than `torque` (N m) about the ankle
+    (`row` from `ankle_torque_row`): an upper bound of |row . w5| over that set,
+    f_max (mu (|r0| + |r1|) + |r2| + |r3| max(toe, heel) + |r4| mu_t), against `torque`.
+
+    HECTOR: 250 N (0.5 x 0.04 + 0.09) = 27.5 N m < 33.5 N m, its foot never asks its ankle
+    for more than it has. H1: 756.4 N (0.5 x 0.07 + 0.14) = 132 N m > 40 N m: a CoP within
+    the foot's 0.14 m toe asks the ankle three times its limit in single support."""
+    r = np.abs(np.asarray(row, dtype=float))
+    bound = limits.f_max * (
+        limits.mu * (r[0] + r[1])
+        + r[2]
+        + r[3] * max(limits.toe, limits.heel)
+        + r[4] * limits.mu_torsion
+    )
+    return bool(bound > torque)

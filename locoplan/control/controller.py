@@ -25,14 +25,14 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
 
 from locoplan.control import wbc_kernels
-from locoplan.control.contact import ContactLimits
+from locoplan.control.contact import ContactLimits, ankle_row_binds, ankle_torque_row
 from locoplan.control.mpc import MpcInput, MpcSettings, MpcSolution, MultiContactMpc
 from locoplan.control.support import clamp_into_support, convex_hull, foot_segments
 from locoplan.control.swing import min_jerk, swing_point
@@ -111,6 +111,14 @@ HAND_TASK_ROWS = 3
 # round-off (1e-15), far below the weakest real task direction (at the start of a stand,
 # 0.068 of 3.0 on H1's 22 rows, 0.054 of 2.7 on HECTOR's).
 NULL_SPACE_RTOL = 1e-6
+# Share of the ankle's torque limit the MPC may plan a stance foot's wrench to need about the
+# ankle axis, on a robot whose foot could otherwise ask for more than the limit
+# (`ankle_mpc_settings`); the rest is the WBC's room for the trunk and swing tasks and the
+# foot's own dynamics. Measured on H1's closed-loop scripts (step, push, walk, side-step,
+# turn; tests/test_h1_closed_loop.py) with the bound at 1.0, 0.9 and 0.8 of the 40 N m: the
+# ankles' peak followed it (1.00, 0.91-0.94, 0.81-0.84); without the bound every script held
+# an ankle at its limit, the MPC planning up to 46 N m.
+ANKLE_TORQUE_SHARE = 0.8
 OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
 
@@ -202,6 +210,83 @@ def posture_in_null_space(
     return np.asarray(Z.dot(y), dtype=np.float64)
 
 
+def _nominal_q(robot: PinocchioRobot, desc: RobotDescription) -> FloatArray:
+    """The nominal configuration (nq,): trunk upright at its nominal height over the origin,
+    the nominal joint angles."""
+    q0 = np.zeros(robot.nq)
+    q0[2] = desc.base_height_nominal
+    q0[6] = 1.0
+    q0[7:] = desc.q_joints_nominal
+    return q0
+
+
+def mpc_body_inertia(robot: PinocchioRobot, desc: RobotDescription, body: str) -> FloatArray:
+    """Rotational inertia (3, 3) (kg m^2, trunk axes = world at the nominal pose) of the MPC's
+    rigid body, `robot` updated at the nominal pose: "composite", the whole robot's
+    locked-joint inertia about its CoM; "upper-body", the bodies outside the legs (trunk,
+    torso, arms) about their own CoM, the legs' mass counted only in the body's mass (lumped
+    at the CoM).
+
+    Why the choice: the MPC's state has the trunk's angular velocity where the centroidal
+    dynamics have the whole robot's angular momentum. Locked joints say the legs turn with
+    the trunk, but a stance leg's foot stays on the ground and a swing leg follows its own
+    task: with heavy legs the composite inertia overstates what the trunk's rotation carries
+    (H1, legs 42 % of the mass: pitch 5.27 kg m^2 composite, 0.96 upper body; HECTOR, legs
+    18 %: 0.53 and 0.18). docs/robots.md compares the two on H1's closed-loop scripts."""
+    if body == "composite":
+        return np.asarray(robot.composite_inertia_world(), dtype=float)
+    if body != "upper-body":
+        raise ValueError(f"unknown MPC body {body!r}")
+    legs = tuple(desc.joint_names[int(i)] for idx in desc.leg_joint_indices for i in idx)
+    return robot.inertia_without_joints_world(legs)
+
+
+def ankle_rows(robot: PinocchioRobot, desc: RobotDescription) -> tuple[FloatArray, float]:
+    """The stance feet's ankle-moment row (5,) (`contact.ankle_torque_row`) and the smaller
+    ankle torque limit (N m). The ankle is each leg's last joint (robot.yaml lists a leg hip
+    to ankle); its axis and the sole site come from the model at the nominal pose (`robot`
+    is updated there), in the foot's yaw frame, where they stay while the foot stands flat.
+    The legs are mirror images: rows differing by more than 1e-9 raise ValueError
+    (MpcSettings has one row for all feet)."""
+    robot.update(_nominal_q(robot, desc), np.zeros(robot.nv))
+    rows = []
+    limits = []
+    for leg, foot in zip(desc.leg_joint_indices, desc.foot_frames, strict=True):
+        ankle = int(leg[-1])
+        origin, axis_world = robot.joint_axis_world(desc.joint_names[ankle])
+        sole = robot.frame_pose(foot)
+        R = sole.R_to_world
+        Rz = rot_z(math.atan2(R[1, 0], R[0, 0]))
+        rows.append(ankle_torque_row(Rz.T.dot(axis_world), Rz.T.dot(sole.p_world - origin)))
+        limits.append(float(desc.torque_limits[ankle]))
+    if not np.allclose(rows[0], rows[1], rtol=0.0, atol=1e-9):
+        raise ValueError(f"the legs' ankle rows differ: {rows[0]} vs {rows[1]}")
+    return rows[0], min(limits)
+
+
+def ankle_mpc_settings(
+    mpc: MpcSettings, limits: ContactLimits, row: FloatArray, torque: float
+) -> MpcSettings:
+    """`mpc` with the stance ankle's torque bound, |row . w5| <= ANKLE_TORQUE_SHARE x torque,
+    when the foot's other rows allow a wrench needing more than `torque` about the ankle
+    (`contact.ankle_row_binds`); else `mpc` itself (HECTOR).
+
+    Why: H1 steps with the CoM 0.2 m beside its stance foot and the MPC moves the centre of
+    pressure towards the toe (up to 0.10 m of the 0.14 m) to stop the trunk pitching when the
+    swing leg lifts; with 500 N on one foot, 0.08 m already asks the ankle for its 40 N m
+    (the sole 0.07 m below the axis adds Fx' x 0.07). The WBC QP then held the ankle at its
+    limit (no clip) and let the wrench deviate from the MPC's, every step. With the row the
+    MPC plans within what the ankle holds, and the ankle peaks where the row puts it."""
+    if not ankle_row_binds(row, limits, torque):
+        return mpc
+    r = tuple(float(x) for x in row)
+    return replace(
+        mpc,
+        ankle_row=(r[0], r[1], r[2], r[3], r[4]),
+        ankle_torque=ANKLE_TORQUE_SHARE * torque,
+    )
+
+
 def wrap_angle(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
@@ -223,10 +308,24 @@ class ControllerSettings:
     The posture gains (1/s^2, 1/s) hold the joints no task determines
     (`posture_joint_indices`) at the nominal pose, as accelerations, so the same numbers
     serve any robot's inertia: kp 100 is a 10 rad/s bandwidth, half the hands' (kp 400), and
-    kd = 2 sqrt(kp) damps it critically. HECTOR has no such joint and never uses them."""
+    kd = 2 sqrt(kp) damps it critically. HECTOR has no such joint and never uses them.
+
+    Where these were checked: set on HECTOR (17 kg, trunk 0.60 m above the soles, foot
+    0.15 m); the same numbers stand, step, walk, side-step and turn H1 (51.4 kg, 0.98 m,
+    foot 0.175 m; tests/test_h1_closed_loop.py, HECTOR's gait of 0.4 s cycles and 0.15 s
+    swings). The trunk, swing and hand gains are task accelerations, independent of mass.
+    Tried on H1 and not kept, each scaled from HECTOR by H1's size: `swing_height` x 0.98 /
+    0.60 = 0.13 m (pitch RMS stepping 0.58 -> 0.84 deg, walking 0.81 -> 0.98 deg, the
+    pelvis 18 -> 29 mm RMS from the plan while walking: the heavy swing leg lifted higher
+    shakes the trunk more) and `raibert_gain` x sqrt(0.98 / 0.60) = 0.064 s (within 1 mm RMS
+    and 0.01 deg of HECTOR's value on every script). So they stay, checked over that range
+    of sizes. (The torsion bound does scale, with the foot's length: `contact.torsion_
+    bound`.)"""
 
     mpc_period: float = 0.01
     mapping: Literal["wbc", "jacobian"] = "wbc"
+    # The MPC's rigid body (`mpc_body_inertia`; robot.yaml `mpc_body`).
+    mpc_body: Literal["composite", "upper-body"] = "composite"
     model: Literal["external-force", "combined"] = "external-force"
     qp_backend: str = "daqp"
     # The MPC must respect the line foot's small yaw friction like the WBC does: planning
@@ -300,7 +399,8 @@ class LocoManipulationController:
         self.desc = desc
         self.plan = plan
         self.s = settings or ControllerSettings()
-        self.mpc = MultiContactMpc(self.s.mpc)
+        row, ankle_torque = ankle_rows(robot, desc)
+        self.mpc = MultiContactMpc(ankle_mpc_settings(self.s.mpc, self.s.limits, row, ankle_torque))
         self.wbc = WholeBodyQp(
             desc.torque_limits, WbcSettings(limits=self.s.limits, backend=self.s.qp_backend)
         )
@@ -376,18 +476,15 @@ class LocoManipulationController:
     # -- set-up --------------------------------------------------------------------------------
     def _nominal_geometry(self) -> None:
         """CoM offset and foot offsets in the trunk's yaw frame at the nominal pose, and the
-        MPC's body inertia (composite, about the CoM, trunk frame)."""
+        MPC's body inertia (`mpc_body_inertia`, trunk frame)."""
         r = self.robot
-        q0 = np.zeros(r.nq)
-        q0[2] = self.desc.base_height_nominal
-        q0[6] = 1.0
-        q0[7:] = self.desc.q_joints_nominal
+        q0 = _nominal_q(r, self.desc)
         r.update(q0, np.zeros(r.nv))
         base = q0[:3]
         self.com_offset = r.com_position - base  # trunk frame == world at yaw 0
         self.foot_offsets = np.array([r.frame_position(f) - base for f in self.desc.foot_frames])
         self.hand_offsets = np.array([r.frame_position(h) - base for h in self.desc.hand_frames])
-        self.inertia_body = np.asarray(r.composite_inertia_world(), dtype=float)
+        self.inertia_body = mpc_body_inertia(r, self.desc, self.s.mpc_body)
         self.mass = float(r.total_mass)
         # Foot placement relative to the CoM (x: support centre under the CoM).
         self.foot_offset_from_com = self.foot_offsets - self.com_offset

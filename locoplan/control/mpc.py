@@ -9,12 +9,15 @@ constraints are constant rows::
     |Fx'| <= mu Fz,  |Fy'| <= mu Fz                         (friction pyramid, 4 rows)
     -toe Fz <= My' <= heel Fz                               (line-foot CoP, 2 rows)
     |Mz'| <= mu_t Fz                                        (optional torsion, 2 rows)
+    |a . w| <= tau_ankle                                    (optional ankle moment, 1 row)
     f_min <= Fz <= f_max                                    (box)
 
 CoP sign: My' is the moment on the robot about the foot's y axis at the sole point under the
 ankle. A vertical force Fz at x_cop along the foot gives (x_cop, 0, 0) x (0, 0, Fz) =
 (0, -x_cop Fz, 0), so My' = -x_cop Fz and x_cop in [-heel, toe] is -toe Fz <= My' <= heel Fz.
-Toe loading gives a negative My'.
+Toe loading gives a negative My'. The ankle row a (``MpcSettings.ankle_row``) gives the
+wrench's moment about the ankle axis, My' - d Fx' for a sole d below a horizontal axis: on a
+robot whose ankle cannot hold what the CoP bounds allow (H1), it is the tighter bound.
 
 F_ext (Model 2) is not a decision variable: it is known from the plan (-m_o g while held) and
 enters the affine term, so the paper's equality F_ext = [0, 0, m_o g] holds by construction.
@@ -51,6 +54,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from locoplan.control import mpc_kernels, srbd
+from locoplan.control.contact import F_MAX_REFERENCE_MASS
 from locoplan.control.mpc_terms import (
     Kernel,
     StepTerms,
@@ -97,6 +101,27 @@ _DEFAULT_Q: Final = (
     0.0,
 )
 _DEFAULT_R: Final = tuple(1e-4 * w for w in (1, 1, 1, 1, 1, 1, 5, 5, 5, 5))
+
+
+def force_weights(mass: float) -> tuple[float, ...]:
+    """The diagonal of R (10,) for a robot of `mass` (kg): `_DEFAULT_R`, set for HECTOR's
+    17 kg (`F_MAX_REFERENCE_MASS`), times (17 / mass)^2, so that the cost of the
+    forces a robot needs (m g shares) weighs against the state errors as it does on HECTOR.
+    The ratio is rounded to 1e-9 (HECTOR's decimal link masses sum to 4e-15 kg over 17):
+    HECTOR gets `_DEFAULT_R` itself.
+
+    Measured on H1 (51.4 kg, R x 0.109) on its closed-loop scripts (tests/
+    test_h1_closed_loop.py), against HECTOR's R: the pelvis tracks the plan closer, RMS /
+    max 8 / 34 mm instead of 12 / 42 stepping in place, 7 / 20 instead of 10 / 24 side-
+    stepping, 18 / 50 instead of 20 / 53 walking; a 9 N s push moves it 3.3 cm instead of
+    4.7; ankle peaks unchanged (0.81-0.85). The moments' weights scale the same way (a moment
+    is a force times a foot-sized lever, which differs between the two by 17 %, not 3x).
+    The WBC's relaxation weights scaled likewise changed nothing measurable and are
+    left as they are."""
+    k = round(F_MAX_REFERENCE_MASS / mass, 9)
+    if k == 1.0:
+        return _DEFAULT_R
+    return tuple(w * k * k for w in _DEFAULT_R)
 
 
 def _default_qp_settings() -> QpSettings:
@@ -146,6 +171,11 @@ class MpcSettings:
     # With mu_torsion: also the centre-of-pressure dependent yaw friction of a line foot
     # (`locoplan.control.contact.yaw_friction_rows`).
     yaw_friction: bool = True
+    # The stance ankle's torque bound on the foot's wrench (`ankle_torque_row`): the row
+    # (5,) on w5 giving the moment about the ankle axis, and the bound (N m). None: no row
+    # (HECTOR: its ankles hold any wrench the other rows allow).
+    ankle_row: tuple[float, float, float, float, float] | None = None
+    ankle_torque: float = np.inf
     backend: str = "daqp"
     formulation: str = "condensed"
     qp: QpSettings = field(default_factory=_default_qp_settings)
@@ -165,6 +195,8 @@ class MpcSettings:
             raise ValueError("MpcSettings: mu, toe and heel must be >= 0")
         if self.mu_torsion is not None and self.mu_torsion < 0:
             raise ValueError("MpcSettings.mu_torsion must be >= 0")
+        if self.ankle_row is not None and not (len(self.ankle_row) == 5 and self.ankle_torque > 0):
+            raise ValueError("MpcSettings.ankle_row needs 5 entries and ankle_torque > 0")
         if self.backend not in BACKENDS:
             raise ValueError(f"unknown MPC backend {self.backend!r}")
         if self.formulation not in FORMULATIONS:

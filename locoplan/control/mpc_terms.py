@@ -198,4 +198,8 @@ def wrench_rows(s: MpcSettings) -> tuple[FloatArray, FloatArray, FloatArray]:
             rows += C_yaw.tolist()
             lo += lo_yaw.tolist()
             hi += hi_yaw.tolist()
+    if s.ankle_row is not None:
+        rows.append(list(s.ankle_row))
+        lo.append(-s.ankle_torque)
+        hi.append(s.ankle_torque)
     return np.array(rows), np.array(lo), np.array(hi)

@@ -45,6 +45,11 @@ DEFAULT_THROW_STOP_OFFSET = 0.16  # m
 DEFAULT_TRUNK_FRONT = 0.07  # m
 DEFAULT_WALK_STRIDE = 0.18  # m
 DEFAULT_HIP_YAW_RANGE_DEG = 30.0  # deg
+# The rigid body of the controller's MPC (robot.yaml `mpc_body`; `locoplan.control.controller.
+# mpc_body_inertia`): "composite", the whole robot's locked-joint inertia at the nominal pose
+# (HECTOR, the default), or "upper-body", the inertia of every body outside the legs about
+# its own centre of mass, the legs' mass lumped at the CoM (H1: docs/robots.md compares them).
+MPC_BODIES = ("composite", "upper-body")
 
 
 def _empty_indices() -> NDArray[np.intp]:
@@ -125,6 +130,7 @@ class RobotDescription:
     stance_width: float = DEFAULT_STANCE_WIDTH  # m, lateral distance of the planned footholds
     reach: RobotReach | None = None
     planner: PlannerFigures = PlannerFigures()
+    mpc_body: str = MPC_BODIES[0]  # one of MPC_BODIES
 
     @property
     def n_joints(self) -> int:
@@ -250,6 +256,7 @@ def load_robot_description(name_or_path: str | Path = "hector") -> RobotDescript
         stance_width=reader.get_positive_or("stance_width", DEFAULT_STANCE_WIDTH),
         reach=reach,
         planner=planner if planner is not None else PlannerFigures(),
+        mpc_body=reader.get_choice_or("mpc_body", MPC_BODIES),
     )
     if np.any(desc.q_joints_nominal < desc.q_lower) or np.any(desc.q_joints_nominal > desc.q_upper):
         raise nominal_deg.error("nominal joint angles must lie within the joint ranges")
@@ -476,6 +483,15 @@ class _Reader:
     def get_positive_or(self, key: str, default: float) -> float:
         """`get_positive` for an optional key: `default` when absent."""
         return self.get_positive(key) if key in self.node else default
+
+    def get_choice_or(self, key: str, choices: tuple[str, ...]) -> str:
+        """An optional string among `choices`: the first of them when absent."""
+        if key not in self.node:
+            return choices[0]
+        value = self.get_str(key)
+        if value not in choices:
+            raise self.error(f"{key!r} must be one of {list(choices)}, got {value!r}")
+        return value
 
     def get_pair(self, key: str) -> tuple[float, float]:
         value = self._get(key)

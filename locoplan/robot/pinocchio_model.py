@@ -163,6 +163,31 @@ class PinocchioRobot:
         """
         return np.array(self.data.oYcrb[0].inertia)
 
+    def inertia_without_joints_world(self, joints: tuple[str, ...]) -> FloatArray:
+        """Rotational inertia (3, 3) (kg m^2, world axes) of the bodies moved by every joint
+        but `joints` (names; the free flyer's body included), about their own CoM, at the
+        last update: the locked-joint inertia of the robot less those joints' bodies."""
+        model, data = self.model, self.data
+        left_out = {model.getJointId(name) for name in joints}
+        if model.njoints in left_out:
+            raise RobotDescriptionError(f"unknown joint among {list(joints)}")
+        total = pin.Inertia.Zero()
+        for j in range(1, model.njoints):
+            if j not in left_out:
+                total += data.oMi[j].act(model.inertias[j])
+        return np.array(total.inertia)
+
+    def joint_axis_world(self, name: str) -> tuple[FloatArray, FloatArray]:
+        """A hinge's origin (3,) (m) and unit axis (3,), world coordinates, at the last
+        update (the axis: the angular part of the joint's own Jacobian column)."""
+        model = self.model
+        jid = model.getJointId(name)
+        if jid >= model.njoints or model.joints[jid].nv != 1:
+            raise RobotDescriptionError(f"{name!r} is not a hinge of the model")
+        J = pin.getJointJacobian(model, self.data, jid, _LWA)
+        axis = np.array(J[3:, model.joints[jid].idx_v])
+        return np.array(self.data.oMi[jid].translation), axis
+
     # ------------------------------------------------------------------ frames
     def frame_pose(self, name: str) -> Pose:
         """Placement of a frame at the last update."""

@@ -18,9 +18,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from locoplan import interrupt
-from locoplan.control.contact import ContactLimits, foot_force_max
+from locoplan.control.contact import ContactLimits, foot_force_max, torsion_bound
 from locoplan.control.controller import ControllerSettings
-from locoplan.control.mpc import MpcSettings
+from locoplan.control.mpc import MpcSettings, force_weights
 from locoplan.exceptions import LocoplanError
 from locoplan.log.writer import RunLogWriter
 from locoplan.metrics import (
@@ -308,11 +308,16 @@ def controller_settings(
 ) -> ControllerSettings:
     """Controller settings from the script (`mpc`, `model`), the run options and the robot
     (`desc`, else the script's): the feet's support segment (robot.yaml `foot`) bounds the
-    centre of pressure, and the normal-force bound per foot scales with the robot's mass
-    (`foot_force_max`; HECTOR's 250 N)."""
+    centre of pressure, the normal-force bound per foot and the MPC's force weights scale
+    with the robot's mass (`foot_force_max`, HECTOR's 250 N; `mpc.force_weights`), the
+    torsion bound with the foot's length (`torsion_bound`, HECTOR's 0.02 m), the MPC's
+    rigid body is robot.yaml's `mpc_body`."""
     desc = desc if desc is not None else load_robot_description(scenario.robot)
     limits = ContactLimits(
-        f_max=foot_force_max(desc.total_mass), toe=desc.foot_toe, heel=desc.foot_heel
+        f_max=foot_force_max(desc.total_mass),
+        toe=desc.foot_toe,
+        heel=desc.foot_heel,
+        mu_torsion=torsion_bound(desc.foot_toe, desc.foot_heel),
     )
     if options.f_min is not None:
         limits = replace(limits, f_min=options.f_min)
@@ -324,11 +329,13 @@ def controller_settings(
         toe=limits.toe,
         heel=limits.heel,
         mu_torsion=limits.mu_torsion,
+        r_diag=force_weights(desc.total_mass),
         backend=options.qp_backend,
     )
     model = options.model or scenario.model
     return ControllerSettings(
         mapping="jacobian" if options.mapping == "jacobian" else "wbc",
+        mpc_body="upper-body" if desc.mpc_body == "upper-body" else "composite",
         model="combined" if model == "combined" else "external-force",
         qp_backend=options.qp_backend,
         mpc=mpc,
