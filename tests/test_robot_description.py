@@ -17,6 +17,7 @@ from locoplan.robot.description import (
     PlannerFigures,
     RobotDescription,
     load_robot_description,
+    resolve_robot_yaml,
     robots_dir,
 )
 
@@ -104,6 +105,24 @@ def test_lookup_by_path_dir_and_env(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     assert load_robot_description("mybot").name == "hector"
     with pytest.raises(RobotDescriptionError, match="no robot description"):
         load_robot_description("hector")
+
+
+def test_a_robot_name_is_not_a_folder_of_scripts(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`robot: h1` names the robot under robots/ even where the working directory has a folder
+    `h1/` (of H1 scripts, say) without a robot.yaml; such a folder with one is a robot."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "h1").mkdir()
+    (tmp_path / "h1" / "transfer.yaml").write_text("version: 1\n")
+    assert resolve_robot_yaml("h1") == robots_dir() / "h1" / "robot.yaml"
+    assert load_robot_description("h1").name == "h1"
+    mine = tmp_path / "mybot"
+    mine.mkdir()
+    _write(mine, _raw())
+    assert resolve_robot_yaml("mybot") == Path("mybot") / "robot.yaml"
+    with pytest.raises(RobotDescriptionError, match="no robot description"):
+        resolve_robot_yaml("nobot")
 
 
 def test_robots_dir_installed_package_before_checkout(

@@ -159,14 +159,18 @@ def robots_dir() -> Path:
 
 
 def resolve_robot_yaml(name_or_path: str | Path) -> Path:
-    """Path of the robot.yaml for a robot name, a robot directory or a robot.yaml path."""
+    """Path of the robot.yaml for a robot name, a robot directory or a robot.yaml path. A
+    name of a robot under `robots_dir()` means that robot even where a directory of that
+    name happens to be in the working directory (a folder of H1 scripts named `h1/` made
+    `robot: h1` look for `h1/robot.yaml` there); a directory counts only with a robot.yaml."""
     candidate = Path(name_or_path)
+    named = robots_dir() / str(name_or_path) / "robot.yaml"
     if candidate.suffix in (".yaml", ".yml"):
         path = candidate
-    elif candidate.is_dir():
-        path = candidate / "robot.yaml"
+    elif named.is_file() or not (candidate / "robot.yaml").is_file():
+        path = named
     else:
-        path = robots_dir() / str(name_or_path) / "robot.yaml"
+        path = candidate / "robot.yaml"
     if not path.is_file():
         raise RobotDescriptionError(
             f"robot {name_or_path!r}: no robot description at {path} "
