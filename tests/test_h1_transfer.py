@@ -1,0 +1,65 @@
+"""Issue 14's H1 package transfer and pick-walk-drop, closed loop in MuJoCo, asserted from the
+simulation state: scenarios/h1-package-transfer.yaml holds the paper's result in kind
+(dynamic at least 1.0 s sooner than quasi-static with a smaller pick-to-drop yaw difference,
+both place the package, neither falls), and scenarios/h1-pick-walk-drop.yaml places its box.
+About 25 s of wall time on two cores."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from locoplan.compare import compare_scenario
+from locoplan.robot.description import load_robot_description
+from locoplan.scenario import load_scenario_file
+from locoplan.sim.run import RunOptions, run_scenario
+
+pytestmark = pytest.mark.closed_loop
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+MIN_TIME_SAVED = 1.0  # s, the issue's "at least 1.0 s sooner"
+
+
+def test_h1_package_transfer_dynamic_is_sooner_with_less_yaw(tmp_path: Path) -> None:
+    loaded = load_scenario_file(SCENARIOS / "h1-package-transfer.yaml")
+    c = compare_scenario(loaded.scenario, loaded.text, tmp_path, jobs=2)
+    assert not c.broke
+    qs, dyn = c.outcome("quasi-static").metrics, c.outcome("dynamic").metrics
+    assert qs is not None and dyn is not None
+    for m in (qs, dyn):
+        assert m["scenario"] == "h1-package-transfer"
+        assert not m["fell"] and m["completed"]
+        assert m["objects"]["package"]["on"] == "conveyor"
+        assert m["peak_torque_ratio"] <= 1.0
+    # Measured 2026-12-04: 5.33 against 3.93 s, 89.4 against 12.1 deg.
+    assert qs["completion_time"] - dyn["completion_time"] >= MIN_TIME_SAVED
+    assert dyn["yaw_difference_deg"] < qs["yaw_difference_deg"]
+
+
+def test_h1_picks_walks_and_places_a_box(tmp_path: Path) -> None:
+    desc = load_robot_description("h1")
+    loaded = load_scenario_file(SCENARIOS / "h1-pick-walk-drop.yaml")
+    scenario = loaded.scenario
+    box, platform = scenario.objects["box"], scenario.fixtures["platform"]
+    result = run_scenario(scenario, loaded.text, RunOptions(out_dir=tmp_path))
+    rec = result.record
+    pos = np.asarray(rec.base_position)  # the pelvis, every 10 ms
+    assert rec.sim_time >= scenario.end_time - 1e-6
+    assert not result.metrics["fell"]
+    # Upright throughout: the pelvis within 5 cm of its nominal height, roll and pitch under
+    # 5 deg (HECTOR's walk tolerances).
+    assert np.max(np.abs(pos[:, 2] - desc.base_height_nominal)) < 0.05
+    assert np.max(np.abs(np.degrees(np.asarray(rec.base_rpy)[:, :2]))) < 5.0
+    # Walked the 0.6 m along +x.
+    assert pos[-1, 0] == pytest.approx(0.6, abs=0.05)
+    # The box rests on the platform: centre at its top plus half the box (1 cm for contact),
+    # inside its footprint, no longer held.
+    end = np.asarray(rec.object_positions["box"])[-1]
+    assert abs(end[2] - (platform.size[2] + box.size[2] / 2.0)) < 0.01
+    assert abs(end[0] - platform.position[0]) < platform.size[0] / 2.0
+    assert abs(end[1] - platform.position[1]) < platform.size[1] / 2.0
+    assert "box" not in rec.held_at_end
+    assert result.metrics["peak_torque_ratio"] <= 1.0
+    assert result.metrics["passed"]
