@@ -28,6 +28,11 @@ GRAVITY = 9.81  # m/s^2
 IK_TOL = 1e-7
 IK_ITERATIONS = 60
 IK_DAMPING = 1e-3
+# The retry of a target the full steps did not reach (`StancePostures.arms`): steps of at most
+# IK_SMALL_STEP rad per joint, IK_SMALL_ITERATIONS of them (enough to swing an arm across its
+# whole range: 300 x 0.05 rad = 15 rad).
+IK_SMALL_STEP = 0.05
+IK_SMALL_ITERATIONS = 300
 # A hand or sole is called out of reach beyond this residual (m): the hands track within 2 cm.
 REACH_TOL = 1e-3
 # Tolerance (m) of the bisection on the legs' largest shift.
@@ -137,15 +142,18 @@ class StancePostures:
         q: FloatArray,
         goals: Sequence[tuple[int, FloatArray, FloatArray | None]],
         joints: NDArray[np.intp],
+        max_step: float = math.inf,
+        iterations: int = IK_ITERATIONS,
     ) -> tuple[FloatArray, FloatArray]:
         """Damped least squares moving `joints` (indices into the joints) so that each frame
         of `goals` (frame id, position, rotation or None) reaches its goal, joint ranges
-        clamped; returns the posture and each goal's residual (m; with the rotation's rad)."""
+        clamped, each step's joint change at most `max_step` (rad, largest component);
+        returns the posture and each goal's residual (m; with the rotation's rad)."""
         model, data, desc = self.model, self.data, self.desc
         q = q.copy()
         lo, hi = desc.q_lower[joints], desc.q_upper[joints]
         residual = np.zeros(len(goals))
-        for _ in range(IK_ITERATIONS):
+        for _ in range(iterations):
             pin.computeJointJacobians(model, data, q)
             pin.updateFramePlacements(model, data)
             errors, rows = [], []
@@ -167,7 +175,11 @@ class StancePostures:
             e_all = np.concatenate(errors)
             J_all = np.vstack(rows)
             JJt = J_all @ J_all.T + IK_DAMPING**2 * np.eye(J_all.shape[0])
-            q[7 + joints] = np.clip(q[7 + joints] + J_all.T @ np.linalg.solve(JJt, e_all), lo, hi)
+            dq = J_all.T @ np.linalg.solve(JJt, e_all)
+            biggest = float(np.max(np.abs(dq)))
+            if biggest > max_step:
+                dq *= max_step / biggest
+            q[7 + joints] = np.clip(q[7 + joints] + dq, lo, hi)
         return q, residual
 
     def arms(self, pose: HeldPose) -> tuple[FloatArray, tuple[float, ...], float]:
@@ -180,7 +192,17 @@ class StancePostures:
             (self._hand_ids[h], np.asarray(p, dtype=float), None)
             for h, p in zip(pose.hands, pose.p_hands_trunk, strict=True)
         ]
-        q, residual = self._dls(q, goals, np.concatenate([self._arms[h] for h in pose.hands]))
+        joints = np.concatenate([self._arms[h] for h in pose.hands])
+        start = q
+        q, residual = self._dls(start, goals, joints)
+        if residual.max() > REACH_TOL:
+            # Full Gauss-Newton steps from the nominal arm can throw an arm against its joint
+            # limits, where the clamped steps stall: H1's left arm ended at shoulder pitch
+            # -164 deg and roll 178 deg for a point 2-5 cm out of reach and reported it 0.2-0.8
+            # m out. Small steps follow the reach down to the nearest posture instead.
+            q_small, r_small = self._dls(start, goals, joints, IK_SMALL_STEP, IK_SMALL_ITERATIONS)
+            if r_small.max() < residual.max():
+                q, residual = q_small, r_small
         pin.framesForwardKinematics(self.model, self.data, q)
         margins = []
         for h, p, r in zip(pose.hands, pose.p_hands_trunk, residual, strict=True):
