@@ -44,10 +44,17 @@ MU_TORSION_REFERENCE = 0.02  # m
 FOOT_LENGTH_REFERENCE = 0.15  # m
 
 
+def reference_ratio(value: float, reference: float) -> float:
+    """value / reference rounded to 1e-9: a robot's figure over HECTOR's, so that HECTOR's
+    own (a sum of decimal link masses comes out 4e-15 kg over 17 kg) gives exactly 1 and the
+    scaled figures are HECTOR's to the bit."""
+    return round(value / reference, 9)
+
+
 def torsion_bound(toe: float, heel: float) -> float:
     """The torsion bound mu_t (m; |Mz'| <= mu_t Fz) of a line foot reaching `toe` ahead of
     and `heel` behind its sole site (m): HECTOR's 0.02 m times the foot length over its
-    0.15 m. The ratio is rounded to 1e-9, so HECTOR's 0.09 + 0.06 gives 0.02 exactly.
+    0.15 m (`reference_ratio`: HECTOR's 0.09 + 0.06 gives 0.02 exactly).
 
     Why it scales: the yaw moment a line foot holds by friction grows with the distance
     between its contact points (`yaw_friction_rows`: mu L Fz / 2 at most). Measured on H1
@@ -57,8 +64,7 @@ def torsion_bound(toe: float, heel: float) -> float:
     yaw 1.0 deg past its +-24.6 deg range for 0.13 s (25.6 deg); with 0.0233 the hip yaw
     peaks at 23.1 deg, within its range, and the other scripts track as before or 1-5 mm
     closer."""
-    k = round((toe + heel) / FOOT_LENGTH_REFERENCE, 9)
-    return MU_TORSION_REFERENCE if k == 1.0 else MU_TORSION_REFERENCE * k
+    return MU_TORSION_REFERENCE * reference_ratio(toe + heel, FOOT_LENGTH_REFERENCE)
 
 
 @dataclass(frozen=True, slots=True)

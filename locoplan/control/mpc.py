@@ -54,7 +54,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from locoplan.control import mpc_kernels, srbd
-from locoplan.control.contact import F_MAX_REFERENCE_MASS
+from locoplan.control.contact import F_MAX_REFERENCE_MASS, reference_ratio
 from locoplan.control.mpc_terms import (
     Kernel,
     StepTerms,
@@ -107,8 +107,8 @@ def force_weights(mass: float) -> tuple[float, ...]:
     """The diagonal of R (10,) for a robot of `mass` (kg): `_DEFAULT_R`, set for HECTOR's
     17 kg (`F_MAX_REFERENCE_MASS`), times (17 / mass)^2, so that the cost of the
     forces a robot needs (m g shares) weighs against the state errors as it does on HECTOR.
-    The ratio is rounded to 1e-9 (HECTOR's decimal link masses sum to 4e-15 kg over 17):
-    HECTOR gets `_DEFAULT_R` itself.
+    The ratio is rounded to 1e-9 (`contact.reference_ratio`): HECTOR gets `_DEFAULT_R`
+    itself.
 
     Measured on H1 (51.4 kg, R x 0.109) on its closed-loop scripts (tests/
     test_h1_closed_loop.py), against HECTOR's R: the pelvis tracks the plan closer, RMS /
@@ -118,7 +118,7 @@ def force_weights(mass: float) -> tuple[float, ...]:
     is a force times a foot-sized lever, which differs between the two by 17 %, not 3x).
     The WBC's relaxation weights scaled likewise changed nothing measurable and are
     left as they are."""
-    k = round(F_MAX_REFERENCE_MASS / mass, 9)
+    k = reference_ratio(F_MAX_REFERENCE_MASS, mass)
     if k == 1.0:
         return _DEFAULT_R
     return tuple(w * k * k for w in _DEFAULT_R)

@@ -57,13 +57,10 @@ def compile_plan(
     strategy = scenario.strategy if strategy is None else strategy
     if strategy not in STRATEGIES:
         raise PlanError(f"unknown strategy '{strategy}'; allowed: {', '.join(STRATEGIES)}")
+    # PlanGeometry checks what replaces its figures (ValueError naming a bad one).
     if base_height is not None:
-        if not (base_height > 0.0 and math.isfinite(base_height)):
-            raise ValueError(f"base_height must be a positive length in m, got {base_height}")
         geometry = replace(geometry, base_height=base_height)
     if foot_width is not None:
-        if not (foot_width > 0.0 and math.isfinite(foot_width)):
-            raise ValueError(f"foot_width must be a positive length in m, got {foot_width}")
         geometry = replace(geometry, foot_width=foot_width)
 
     tasks = plan_tasks(scenario)
