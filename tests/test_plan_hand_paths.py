@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,7 +11,7 @@ from plan_fixtures import repo_scenario, scenario_from_text
 
 from locoplan.plan import compile_plan
 from locoplan.plan import constants as k
-from locoplan.plan.clearance import fixture_obstacle, track_clearance
+from locoplan.plan.clearance import fixture_obstacle, object_obstacle, track_clearance
 from locoplan.plan.hand_paths import (
     carry_forward,
     grip_height,
@@ -18,6 +19,9 @@ from locoplan.plan.hand_paths import (
     tuck_waypoint,
     world_to_trunk,
 )
+from locoplan.plan.robot_geometry import GRASP_SPHERE_GAP, plan_geometry
+from locoplan.robot.description import load_robot_description, resolve_robot_yaml
+from locoplan.scenario import load_scenario
 from locoplan.scenario.model import ObjectSpec
 
 EXACT = 1e-12  # closed forms, float rounding only
@@ -160,3 +164,41 @@ def test_a_hand_that_starts_near_one_fixture_keeps_clear_of_the_others() -> None
     assert at_start.minimum < k.APPROACH_CLEARANCE  # the case: it starts near the platform
     reach = track_clearance(right, plan.trunk, (table,), 0.43, hold.grasp, -math.inf)
     assert reach.minimum >= k.APPROACH_CLEARANCE - 1e-6
+
+
+PICK_DURING_A_RIGHT_TURN = Path(__file__).parent / "data" / "h1-pick-during-right-turn.yaml"
+
+
+def test_a_reach_that_would_cut_the_objects_corner_goes_round_it() -> None:
+    """In a pick during a turn, the right hand's straight (and tucked) reaches to the point
+    beside the parcel's far side came 4.4 cm inside the parcel's near corner, with the trunk's
+    yaw off by as much as it may be; in MuJoCo the grasp closed with that hand at the corner
+    and the parcel turned 70 deg in the hands (H1 envelope seed 33331, transfer-052). The hand
+    now goes to beside the near corner first and slides along the side: the whole approach
+    keeps the pre-grasp clearance (GRASP_SPHERE_GAP, 3 cm, less the 10 ms sampling's 1 mm)
+    from the parcel and the table. Checked on the plan's own track, as the planner samples
+    it."""
+    scenario = load_scenario(PICK_DURING_A_RIGHT_TURN)
+    geometry = plan_geometry(load_robot_description(resolve_robot_yaml("h1")))
+    plan = compile_plan(scenario, geometry=geometry)
+    spec = scenario.objects["parcel"]
+    parcel = object_obstacle(
+        "parcel", spec, tuple(spec.position), math.radians(spec.yaw), (0.0, 0.0), 0.0
+    )
+    table = fixture_obstacle("table", scenario.fixtures["table"])
+    pick = scenario.tasks[1]
+    for hand in (0, 1):
+        track = plan.manipulation.tracks[hand]
+        ours = [s for s in track.segments if s.task_index == 1]
+        t_reach = next(s.t0 for s in ours if s.label == "squeeze")
+        gap = track_clearance(
+            track,
+            plan.trunk,
+            (parcel, table),
+            pick.start,
+            t_reach,
+            -math.inf,
+            hand_radius=geometry.hand_radius,
+        )
+        assert gap.minimum >= GRASP_SPHERE_GAP - 0.002, (hand, gap)
+    assert "slide" in [s.label for s in plan.manipulation.tracks[1].segments]

@@ -376,6 +376,7 @@ class _Builder:
         ax, ay = approach_direction(rx, ry, ox, oy, ryaw)
         lx, ly = -ay, ax
         half = support_half_width(obj, oyaw, lx, ly)
+        depth = support_half_width(obj, oyaw, ax, ay)
         obstacles = self.obstacles()
         geom = self.geom
         lift = grip_height(obj, geom) if moving else 0.0
@@ -414,6 +415,9 @@ class _Builder:
         for h in hands:
             side = SIDE[h]
             pre = beside((ox, oy, gz), side * (half + self.geom.grasp_clearance), lx, ly)
+            # Beside the object's near corner, as far outside its near face as `pre` is
+            # outside its side: where a reach that would cut the corner goes first.
+            entry = beside(pre, -(depth + self.geom.grasp_clearance), ax, ay)
             touch = beside((ox, oy, gz), side * (half + geom.hand_radius), lx, ly)
             grip = beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
             raised = (grip[0] - pull * ax, grip[1] - pull * ay, gz + phases.raise_height)
@@ -437,6 +441,7 @@ class _Builder:
                 obstacles,
                 self.initial[h],
                 geom,
+                HandWaypoint(entry, "world"),
             )
             for seg in approach:
                 self.add(h, seg)
