@@ -1,8 +1,9 @@
 """Issue 14's H1 package transfer and pick-walk-drop, closed loop in MuJoCo, asserted from the
 simulation state: scenarios/h1-package-transfer.yaml holds the paper's result in kind
 (dynamic at least 1.0 s sooner than quasi-static with a smaller pick-to-drop yaw difference,
-both place the package, neither falls), and scenarios/h1-pick-walk-drop.yaml places its box.
-About 25 s of wall time on two cores."""
+both place the package, neither falls), scenarios/h1-pick-walk-drop.yaml places its box, and
+a pick during a right turn keeps its parcel level (tests/data/h1-pick-during-right-turn.yaml).
+About 35 s of wall time on two cores."""
 
 from __future__ import annotations
 
