@@ -19,10 +19,10 @@ from locoplan.plan.hand_paths import (
     tuck_waypoint,
     world_to_trunk,
 )
-from locoplan.plan.robot_geometry import GRASP_SPHERE_GAP, plan_geometry
-from locoplan.robot.description import load_robot_description, resolve_robot_yaml
+from locoplan.plan.robot_geometry import GRASP_SPHERE_GAP
 from locoplan.scenario import load_scenario
 from locoplan.scenario.model import ObjectSpec
+from locoplan.sim.robot_plan import compile_robot_plan
 
 EXACT = 1e-12  # closed forms, float rounding only
 
@@ -179,8 +179,8 @@ def test_a_reach_that_would_cut_the_objects_corner_goes_round_it() -> None:
     from the parcel and the table. Checked on the plan's own track, as the planner samples
     it."""
     scenario = load_scenario(PICK_DURING_A_RIGHT_TURN)
-    geometry = plan_geometry(load_robot_description(resolve_robot_yaml("h1")))
-    plan = compile_plan(scenario, geometry=geometry)
+    plan = compile_robot_plan(scenario)  # the script's robot: H1
+    geometry = plan.geometry
     spec = scenario.objects["parcel"]
     parcel = object_obstacle(
         "parcel", spec, tuple(spec.position), math.radians(spec.yaw), (0.0, 0.0), 0.0

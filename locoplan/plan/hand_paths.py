@@ -13,7 +13,6 @@ or walks towards, nor knock what it has just put down.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 from locoplan.plan import constants as k
@@ -307,25 +306,60 @@ def approach_segments(
         return direct
     t_hit = c_direct.first_below
 
+    tuck = tuck_waypoint(hand, tuck_y, geo)
+    # A hand that rests tucked already (the initial pose beside a near table, or a retreat's
+    # end; in trunk) only widens to this tuck, in the time its arm needs for that, and the
+    # rise and reach may begin as soon as the hand is free. (Standing picks from a tucked
+    # start had no time for a full 0.4 s tuck as well, kept the straight reach and cut the
+    # table's near edge with the hands: envelope seed 11, standing-hold-010 fell backwards.)
+    tx, _, tz = geo.hand_tuck_in_trunk
+    if cur.frame == "trunk" and abs(cur.point[0] - tx) + abs(cur.point[2] - tz) < 1e-9:
+        tuck_time = rest_to_rest_duration(math.dist(cur.point, tuck.point))
+    else:
+        tuck_time = k.TUCK_DURATION
+    # Latest tuck first (the hands stay out as long as they can), then earlier ones; for each,
+    # the earliest reach start from which the rest is clear.
+    t_tuck1_latest = max(
+        min(max(t_hit - k.TUCK_LEAD, t_free + tuck_time), t_end - k.REACH_MIN_DURATION),
+        t_free + tuck_time,
+    )
+    # From the tucked pose (below table tops) the hand first rises close to the body to the
+    # target's height, then reaches out level: a straight line from below a table's top to a
+    # point above it would cut the table's near edge.
+    lifted = lifted_tuck_waypoint(hand, tuck_y, target, trunk, geo)
+
     def search(
         via: HandWaypoint | None, best: list[HandSegment], best_gap: float
     ) -> tuple[bool, list[HandSegment], float]:
-        return _tucked_search(
-            hand,
-            cur,
-            t_free,
-            t_hit,
-            t_end,
-            task_index,
-            target,
-            tuck_y,
-            trunk,
-            geo,
-            lambda t_r, frm: finish(t_r, frm, via),
-            lambda cand, t0, gb: gap(cand, t0, t_end, threshold, give_up_below=gb),
-            best,
-            best_gap,
-        )
+        """The tucked paths (tuck, rise close to the body, then `finish` by way of `via` from
+        the raised tuck): whether one is clear, that one or the best so far (`best`, with
+        clearance `best_gap`), and its clearance."""
+        t_tuck1 = t_tuck1_latest
+        while True:
+            t_tuck0 = max(t_free, t_tuck1 - tuck_time)
+            if tuck_time > 0.0 and t_tuck1 <= t_tuck0:
+                break
+            moves = (
+                [HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")] if tuck_time else []
+            )
+            t_first = t_tuck1 + k.TUCK_LIFT_DURATION
+            n = int((t_end - k.REACH_MIN_DURATION - t_first) / k.REACH_START_STEP + 1e-9)
+            for j in range(n + 1):
+                t_r = t_first + j * k.REACH_START_STEP
+                cand = [
+                    *moves,
+                    HandSegment(t_r - k.TUCK_LIFT_DURATION, t_r, tuck, lifted, task_index, "lift"),
+                    *finish(t_r, lifted, via),
+                ]
+                c = gap(cand, t_tuck0, t_end, threshold, give_up_below=best_gap)
+                if c.first_below is None:
+                    return True, cand, c.minimum
+                if c.minimum > best_gap:
+                    best, best_gap = cand, c.minimum
+            if t_tuck0 <= t_free:
+                break
+            t_tuck1 = max(t_tuck1 - k.TUCK_STEP, t_free + tuck_time)
+        return False, best, best_gap
 
     found, best, best_gap = search(None, direct, c_direct.minimum)
     if found or entry is None or best_gap >= 0.0:
@@ -355,72 +389,6 @@ def _entry_finish(
         HandSegment(t_r, t_s, frm, entry, task_index, "reach"),
         HandSegment(t_s, t_end, entry, target, task_index, "slide"),
     ]
-
-
-def _tucked_search(
-    hand: int,
-    cur: HandWaypoint,
-    t_free: float,
-    t_hit: float,
-    t_end: float,
-    task_index: int,
-    target: HandWaypoint,
-    tuck_y: float,
-    trunk: TrunkPath,
-    geo: PlanGeometry,
-    finish: Callable[[float, HandWaypoint], list[HandSegment]],
-    gap: Callable[[list[HandSegment], float, float], Clearance],
-    best: list[HandSegment],
-    best_gap: float,
-) -> tuple[bool, list[HandSegment], float]:
-    """The tucked paths of `approach_segments` (tuck, rise close to the body, then `finish`
-    from the raised tuck): (whether one is clear, that one or the best so far, its clearance).
-    `gap(candidate, t0, give_up_below)` is the clearance from t0 to t_end."""
-    tuck = tuck_waypoint(hand, tuck_y, geo)
-    # A hand that rests tucked already (the initial pose beside a near table, or a retreat's
-    # end; in trunk) only widens to this tuck, in the time its arm needs for that, and the
-    # rise and reach may begin as soon as the hand is free. (Standing picks from a tucked
-    # start had no time for a full 0.4 s tuck as well, kept the straight reach and cut the
-    # table's near edge with the hands: envelope seed 11, standing-hold-010 fell backwards.)
-    tx, _, tz = geo.hand_tuck_in_trunk
-    if cur.frame == "trunk" and abs(cur.point[0] - tx) + abs(cur.point[2] - tz) < 1e-9:
-        tuck_time = rest_to_rest_duration(math.dist(cur.point, tuck.point))
-    else:
-        tuck_time = k.TUCK_DURATION
-    # Latest tuck first (the hands stay out as long as they can), then earlier ones; for each,
-    # the earliest reach start from which the rest is clear.
-    t_tuck1_latest = max(
-        min(max(t_hit - k.TUCK_LEAD, t_free + tuck_time), t_end - k.REACH_MIN_DURATION),
-        t_free + tuck_time,
-    )
-    t_tuck1 = t_tuck1_latest
-    while True:
-        t_tuck0 = max(t_free, t_tuck1 - tuck_time)
-        if tuck_time > 0.0 and t_tuck1 <= t_tuck0:
-            break
-        moves = [HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")] if tuck_time else []
-        # From the tucked pose (below table tops) the hand first rises close to the body to
-        # the target's height, then reaches out level: a straight line from below a table's
-        # top to a point above it would cut the table's near edge.
-        lifted = lifted_tuck_waypoint(hand, tuck_y, target, trunk, geo)
-        t_first = t_tuck1 + k.TUCK_LIFT_DURATION
-        n = int((t_end - k.REACH_MIN_DURATION - t_first) / k.REACH_START_STEP + 1e-9)
-        for j in range(n + 1):
-            t_r = t_first + j * k.REACH_START_STEP
-            cand = [
-                *moves,
-                HandSegment(t_r - k.TUCK_LIFT_DURATION, t_r, tuck, lifted, task_index, "lift"),
-                *finish(t_r, lifted),
-            ]
-            c = gap(cand, t_tuck0, best_gap)
-            if c.first_below is None:
-                return True, cand, c.minimum
-            if c.minimum > best_gap:
-                best, best_gap = cand, c.minimum
-        if t_tuck0 <= t_free:
-            break
-        t_tuck1 = max(t_tuck1 - k.TUCK_STEP, t_free + tuck_time)
-    return False, best, best_gap
 
 
 def retreat_segments(
