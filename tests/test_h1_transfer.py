@@ -2,8 +2,10 @@
 simulation state: scenarios/h1-package-transfer.yaml holds the paper's result in kind
 (dynamic at least 1.0 s sooner than quasi-static with a smaller pick-to-drop yaw difference,
 both place the package, neither falls), scenarios/h1-pick-walk-drop.yaml places its box, and
-a pick during a right turn keeps its parcel level (tests/data/h1-pick-during-right-turn.yaml).
-About 35 s of wall time on two cores."""
+a pick during a right turn keeps its parcel level (tests/data/h1-pick-during-right-turn.yaml),
+and a box pulled in from full reach keeps the elbows on their nominal side
+(tests/data/h1-walk-carry-pull-in.yaml).
+About 45 s of wall time on two cores."""
 
 from __future__ import annotations
 
@@ -90,4 +92,30 @@ def test_h1_pick_during_a_right_turn_holds_the_parcel_level(tmp_path: Path) -> N
     assert np.max(tilt[held]) < 20.0
     assert tilt[-1] < 5.0
     assert result.metrics["objects"]["parcel"]["on"] == "conveyor"
+    assert result.metrics["passed"]
+
+
+def test_h1_pull_in_keeps_the_elbows_on_their_side(tmp_path: Path) -> None:
+    """A 2.2 kg box pulled in after its pick and carried through a 71 deg turn and a 1.1 m
+    walk (H1 envelope seed 40009, walk-carry-002): the hands start the pull-in near full
+    reach. Before the arms' working range (`locoplan.robot.arm_range`) both elbows went
+    through the straight arm (1.48 rad) and on to their 2.61 rad stop, the hands stayed
+    10-20 cm from their targets with the shoulder rolls saturated, and the robot fell at 3.4
+    s. Now the elbows stay on their nominal side and the box is placed."""
+    loaded = load_scenario_file(Path(__file__).parent / "data" / "h1-walk-carry-pull-in.yaml")
+    scenario = loaded.scenario
+    result = run_scenario(scenario, loaded.text, RunOptions(out_dir=tmp_path))
+    assert not result.metrics["fell"]
+    assert result.log_path is not None
+    elbows = [
+        j.position
+        for _, m in read_log(result.log_path).messages("/joint_states")
+        for j in m.joints
+        if j.name.endswith("elbow")
+    ]
+    assert len(elbows) > 1000
+    # Never past the straight arm (1.48 rad); measured at most 1.25 rad.
+    assert max(elbows) < 1.45
+    assert result.metrics["objects"]["box"]["on"] == "platform"
+    assert result.metrics["peak_torque_ratio"] <= 1.0
     assert result.metrics["passed"]

@@ -47,6 +47,7 @@ from locoplan.control.wbc import (
 from locoplan.control.wbc_kernels import stack_tasks
 from locoplan.exceptions import SolverFailure
 from locoplan.plan import ObjectHold, Plan
+from locoplan.robot.arm_range import working_range
 from locoplan.robot.conventions import pin_base_rotation
 from locoplan.robot.description import RobotDescription
 from locoplan.robot.pinocchio_model import PinocchioRobot
@@ -180,6 +181,32 @@ def posture_acceleration(
     velocity columns `cols` (k,) = j + 6, in pinocchio's q (joint j at q[7 + j]) and v (at
     v[6 + j]); `q_des` (k,) rad."""
     return kp * (q_des - q[cols + 1]) - kd * v[cols]
+
+
+def joint_wall_rows(
+    cols: npt.NDArray[np.intp],
+    lower: FloatArray,
+    upper: FloatArray,
+    q: FloatArray,
+    v: FloatArray,
+    qdd: FloatArray,
+    kp: float,
+    kd: float,
+) -> tuple[npt.NDArray[np.intp], FloatArray]:
+    """The joints at velocity columns `cols` (k,) that `qdd` (nv,) would drive through their
+    working bounds `lower` / `upper` (k,), rad, and the acceleration (rad/s^2) each gets
+    instead: kp (bound - q_j) - kd qdot_j, a critically damped approach that stops at the
+    bound. Returns (columns, accelerations); empty when no joint is driven past its bound.
+    q in pinocchio's layout (joint j at q[7 + j], velocity column j + 6)."""
+    qj = q[cols + 1]
+    vj = v[cols]
+    a_hi = kp * (upper - qj) - kd * vj
+    a_lo = kp * (lower - qj) - kd * vj
+    a = qdd[cols]
+    over = a > a_hi
+    under = a < a_lo
+    hit = over | under
+    return cols[hit], np.where(over, a_hi, a_lo)[hit]
 
 
 def posture_in_null_space(
@@ -443,6 +470,15 @@ class LocoManipulationController:
         posture = posture_joint_indices(desc)
         self._cols_posture = posture + 6
         self._q_posture = np.asarray(desc.q_joints_nominal, dtype=float)[posture]
+        # Joints whose working range is narrower than their MJCF range (`working_range`: an
+        # elbow that can fold past the straight arm; none on HECTOR), their columns and bounds.
+        lower, upper = working_range(robot)
+        walled = np.flatnonzero(
+            (lower > np.asarray(desc.q_lower)) | (upper < np.asarray(desc.q_upper))
+        )
+        self._cols_wall = walled.astype(np.intp) + 6
+        self._wall_lower = lower[walled]
+        self._wall_upper = upper[walled]
         # Frames read every tick, in `step`'s order: feet, hands, trunk.
         self._frames = (*desc.foot_frames, *desc.hand_frames, desc.trunk_body)
         s = self.s
@@ -472,6 +508,44 @@ class LocoManipulationController:
             for h in plan.holds
             if self._leans_before_lift(h)
         ]
+
+    def _keep_in_working_range(
+        self,
+        J_t: FloatArray,
+        b_t: FloatArray,
+        a_t: FloatArray,
+        ends: npt.NDArray[np.int64],
+        qdd: FloatArray,
+        q: FloatArray,
+        v: FloatArray,
+    ) -> tuple[FloatArray, FloatArray, FloatArray, npt.NDArray[np.int64], FloatArray]:
+        """The task stack with a first level that stops each joint `qdd` would drive through
+        its working bound (`joint_wall_rows`, the posture gains), and the accelerations
+        solved again under it; the stack and `qdd` unchanged when no joint is driven there.
+        The hands then follow their targets as far as the rest of the arm allows: on H1
+        (`locoplan.robot.arm_range`) a hand pulled in from full reach bends the elbow the
+        nominal way instead of straightening it through the singularity and folding it
+        backwards onto its stop."""
+        cols, acc = joint_wall_rows(
+            self._cols_wall,
+            self._wall_lower,
+            self._wall_upper,
+            q,
+            v,
+            qdd,
+            self.s.posture_kp_acc,
+            self.s.posture_kd_acc,
+        )
+        if not len(cols):
+            return J_t, b_t, a_t, ends, qdd
+        n = len(cols)
+        rows = np.zeros((n, J_t.shape[1]))
+        rows[np.arange(n), cols] = 1.0
+        J_t = np.vstack((rows, J_t))
+        b_t = np.concatenate((np.zeros(n), b_t))
+        a_t = np.concatenate((acc, a_t))
+        ends = np.concatenate(([n], ends + n)).astype(np.int64)
+        return J_t, b_t, a_t, ends, prioritized_rows(J_t, a_t - b_t, ends)
 
     # -- set-up --------------------------------------------------------------------------------
     def _nominal_geometry(self) -> None:
@@ -1297,6 +1371,10 @@ class LocoManipulationController:
                 hand_acc,
             )
             qdd_cmd = prioritized_rows(J_t, a_t - b_t, ends)
+            if len(self._cols_wall):
+                J_t, b_t, a_t, ends, qdd_cmd = self._keep_in_working_range(
+                    J_t, b_t, a_t, ends, qdd_cmd, q, v
+                )
             if len(self._cols_posture):
                 # Lowest priority: the posture of the joints no task above determines.
                 a_p = posture_acceleration(

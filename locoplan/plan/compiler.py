@@ -367,15 +367,22 @@ def _wait_for_heavy_lifts(
 
 
 def _leg_torque(robot: str) -> float:
-    """The torque limit (N m) of the robot's weakest leg joint (its description); inf when
-    the description cannot be read (the payload check then says why, for plans that hold
-    something)."""
+    """The torque limit (N m) of the robot's weaker hip pitch (`hip_pitch_joints`: what a
+    load held ahead loads in single support); inf when the description cannot be read (the
+    payload check then says why, for plans that hold something).
+
+    The hip pitch, not the weakest leg joint: on HECTOR the two are the same 33.5 N m (its
+    knees have 67), and the heavy pull-in was found from its stance hip pitch saturating
+    (constants' PULL_FAST_SHARE). H1's weakest leg joint is its ankle (40 N m, the line
+    foot's pitch, bounded by the centre of pressure anyway) and its hip pitch has 200 N m:
+    read as the weakest, every box over 4.1 kg picked 0.5 m ahead was "heavy" and came in
+    during the raise at 12 m/s^2, and a 4.6 kg box swung 31 deg in the hands and caught its
+    target's edge (H1 envelope seed 40009, walk-carry-025)."""
     from locoplan.exceptions import RobotDescriptionError
     from locoplan.plan.statics import static_model
 
     try:
-        desc = static_model(robot).desc
+        model = static_model(robot)
     except RobotDescriptionError:
         return math.inf
-    legs = [int(i) for side in desc.leg_joint_indices for i in side]
-    return float(min(desc.torque_limits[legs]))
+    return float(min(model.desc.torque_limits[j] for j in model.postures.hip_pitch_joints))
