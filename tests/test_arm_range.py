@@ -113,3 +113,32 @@ def test_static_ik_reaches_past_the_elbow_bound_with_the_shoulder() -> None:
     for side in "LR":
         j = postures.desc.joint_names.index(f"{side}_elbow")
         assert q[7 + j] <= postures.q_upper[j] + 1e-12
+
+
+def test_heavy_pull_reads_the_hip_pitch() -> None:
+    """The heavy pull-in's leg torque (`compiler._leg_torque`) is the hip pitch's limit: the
+    same 33.5 N m as HECTOR's weakest leg joint, and H1's 200 N m, not its 40 N m ankle."""
+    from locoplan.plan.compiler import _leg_torque
+    from locoplan.plan.statics import static_model
+
+    for robot, names, torque in (
+        ("hector", ["L_hip_pitch", "R_hip_pitch"], 33.5),
+        ("h1", ["L_hip_pitch", "R_hip_pitch"], 200.0),
+    ):
+        model = static_model(robot)
+        assert [model.desc.joint_names[j] for j in model.postures.hip_pitch_joints] == names
+        assert _leg_torque(robot) == pytest.approx(torque)
+
+
+def test_an_unbounded_side_never_walls() -> None:
+    """The controller walls only the narrowed side (-inf / inf on the MJCF side, which
+    MuJoCo's limit holds): an elbow folding fast towards its MJCF stop is left alone (a wall
+    there braked H1's elbow 1.3 rad early in the tuck and threw the arms about)."""
+    cols = np.array([6], dtype=np.intp)
+    q = np.zeros(8)
+    q[7] = -0.5
+    v = np.zeros(7)
+    v[6] = -10.0
+    qdd = np.full(7, -100.0)
+    hit, _ = joint_wall_rows(cols, np.array([-np.inf]), np.array([1.377]), q, v, qdd, 100.0, 20.0)
+    assert len(hit) == 0

@@ -472,13 +472,16 @@ class LocoManipulationController:
         self._q_posture = np.asarray(desc.q_joints_nominal, dtype=float)[posture]
         # Joints whose working range is narrower than their MJCF range (`working_range`: an
         # elbow that can fold past the straight arm; none on HECTOR), their columns and bounds.
+        # Only the narrowed side is walled: MuJoCo's joint limit holds the MJCF side, and a
+        # wall there braked H1's elbow from 10 rad/s 1.3 rad before its -1.25 rad stop in
+        # the tuck, which threw the arms about (envelope seed 41011, side-carry-003, fell).
         lower, upper = working_range(robot)
-        walled = np.flatnonzero(
-            (lower > np.asarray(desc.q_lower)) | (upper < np.asarray(desc.q_upper))
-        )
+        narrowed_lo = lower > np.asarray(desc.q_lower)
+        narrowed_hi = upper < np.asarray(desc.q_upper)
+        walled = np.flatnonzero(narrowed_lo | narrowed_hi)
         self._cols_wall = walled.astype(np.intp) + 6
-        self._wall_lower = lower[walled]
-        self._wall_upper = upper[walled]
+        self._wall_lower = np.where(narrowed_lo, lower, -np.inf)[walled]
+        self._wall_upper = np.where(narrowed_hi, upper, np.inf)[walled]
         # Frames read every tick, in `step`'s order: feet, hands, trunk.
         self._frames = (*desc.foot_frames, *desc.hand_frames, desc.trunk_body)
         s = self.s

@@ -34,6 +34,12 @@ IK_DAMPING = 1e-3
 # whole range: 300 x 0.05 rad = 15 rad).
 IK_SMALL_STEP = 0.05
 IK_SMALL_ITERATIONS = 300
+# The damping (m) and step (IK_SMALL_STEP) of a step solved without an elbow held at its
+# working bound (`StancePostures._dls`): the arm is then within 0.1 rad of straight, the
+# shoulder yaw turns it about its own length and moves the hand 3 cm per rad, and at
+# IK_DAMPING full steps threw the arm against its limits (H1 envelope seed 41011,
+# standing-hold-005: 0.21 m reported out for a point 0.04 m beyond reach).
+IK_BLOCKED_DAMPING = 0.02
 # A hand or sole is called out of reach beyond this residual (m): the hands track within 2 cm.
 REACH_TOL = 1e-3
 # Tolerance (m) of the bisection on the legs' largest shift.
@@ -216,8 +222,11 @@ class StancePostures:
                 # measured (HECTOR's static figures; done for all joints, its payload limits
                 # moved by up to 10 %).
                 J_all[:, blocked] = 0.0
-                JJt = J_all @ J_all.T + IK_DAMPING**2 * np.eye(J_all.shape[0])
+                JJt = J_all @ J_all.T + IK_BLOCKED_DAMPING**2 * np.eye(J_all.shape[0])
                 dq = J_all.T @ np.linalg.solve(JJt, e_all)
+                biggest = float(np.max(np.abs(dq)))
+                if biggest > IK_SMALL_STEP:
+                    dq *= IK_SMALL_STEP / biggest
             biggest = float(np.max(np.abs(dq)))
             if biggest > max_step:
                 dq *= max_step / biggest
