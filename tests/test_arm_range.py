@@ -65,37 +65,48 @@ def test_hector_keeps_its_mjcf_ranges() -> None:
 
 
 def test_wall_rows_stop_a_joint_at_its_bound() -> None:
-    kp, kd = 100.0, 20.0
+    """The wall lets a joint approach its bound no faster than sqrt(2 A d) (A the
+    deceleration, d the distance left), reached with time constant tau."""
+    A, tau = 50.0, 0.05
     cols = np.array([6, 7], dtype=np.intp)  # joints 0 and 1
     lower, upper = np.array([-1.0, -1.0]), np.array([1.0, 1.0])
     q = np.zeros(9)
     v = np.zeros(8)
-    # Joint 0 at 0.99 rad, still, asked 50 rad/s^2 outwards: held to kp x 0.01 = 1 rad/s^2.
-    # Joint 1 at 0, asked 50 rad/s^2: the wall allows kp x 1 = 100, so no row.
+    # Joint 0 0.01 rad from its bound, still, asked 50 rad/s^2 outwards: allowed speed
+    # sqrt(2 x 50 x 0.01) = 1 rad/s, so (1 - 0) / 0.05 = 20 rad/s^2. Joint 1 at 0, 1 rad
+    # away (allowed 10 rad/s, 200 rad/s^2): no row.
     q[7] = 0.99
     qdd = np.zeros(8)
     qdd[6] = qdd[7] = 50.0
-    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, kp, kd)
+    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, A, tau)
     assert hit.tolist() == [6]
-    assert acc == pytest.approx([1.0])
-    # Moving towards the bound at 3 rad/s from 0.5 rad away: braking already
-    # (kp x 0.5 - kd x 3 = -10 rad/s^2) although the task asks for nothing.
-    q[7] = 0.5
-    v[6] = 3.0
+    assert acc == pytest.approx([20.0])
+    # 0.04 rad away at 3 rad/s: allowed 2 rad/s, so it brakes at (2 - 3) / 0.05 = -20 rad/s^2
+    # although the task asks for nothing; 0.25 rad away at the same speed (allowed 5 rad/s)
+    # it is left alone (a PD on the bound, kp 100 kd 20, braked there already).
+    q[7], v[6] = 0.96, 3.0
     qdd[:] = 0.0
-    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, kp, kd)
+    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, A, tau)
     assert hit.tolist() == [6]
-    assert acc == pytest.approx([-10.0])
-    # The lower bound the same way: joint 1 at -0.99, asked -50: held to -1.
-    q[7], v[6] = 0.0, 0.0
+    assert acc == pytest.approx([-20.0])
+    q[7] = 0.75
+    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, A, tau)
+    assert len(hit) == 0
+    # Past the bound by 0.01 rad, still: pushed back at -1 rad/s, -20 rad/s^2.
+    q[7], v[6] = 1.01, 0.0
+    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, A, tau)
+    assert hit.tolist() == [6]
+    assert acc == pytest.approx([-20.0])
+    # The lower bound the same way: joint 1 0.01 rad above -1, asked -50: held to -20.
+    q[7] = 0.0
     q[8] = -0.99
     qdd[7] = -50.0
-    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, kp, kd)
+    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, A, tau)
     assert hit.tolist() == [7]
-    assert acc == pytest.approx([-1.0])
+    assert acc == pytest.approx([-20.0])
     # Nothing near a bound: no row.
     q[8] = 0.0
-    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, kp, kd)
+    hit, acc = joint_wall_rows(cols, lower, upper, q, v, qdd, A, tau)
     assert len(hit) == 0 and len(acc) == 0
 
 
@@ -140,5 +151,5 @@ def test_an_unbounded_side_never_walls() -> None:
     v = np.zeros(7)
     v[6] = -10.0
     qdd = np.full(7, -100.0)
-    hit, _ = joint_wall_rows(cols, np.array([-np.inf]), np.array([1.377]), q, v, qdd, 100.0, 20.0)
+    hit, _ = joint_wall_rows(cols, np.array([-np.inf]), np.array([1.377]), q, v, qdd)
     assert len(hit) == 0

@@ -148,6 +148,17 @@ def rigid_pair_targets(targets: FloatArray, p_hands: FloatArray) -> FloatArray:
     return np.array([mid + half, mid - half])
 
 
+# The wall that keeps a joint inside its working range (`joint_wall_rows`): the joint may
+# approach its bound no faster than it can stop there at WALL_DECEL (rad/s^2), and is brought
+# to that speed with the time constant WALL_TAU (s). A PD on the bound (kp 100, kd 20, the
+# posture gains) braked H1's elbow from 1.2 rad/s 0.15 rad before its bound, its hands lagged
+# the reach for a box at full reach, and the grasp closed late (envelope seed 41011,
+# transfer-026). 50 rad/s^2 is a seventh of what H1's elbow torque (18 N m) gives its forearm
+# (about 0.05 kg m^2); checked on H1 seeds 40009 and 41011.
+WALL_DECEL = 50.0
+WALL_TAU = 0.05
+
+
 def posture_joint_indices(desc: RobotDescription) -> npt.NDArray[np.intp]:
     """Joints (indices into `desc.joint_names`, sorted) that no task of the stack determines:
     the torso joints (no task uses them alone) and every joint of a limb with more joints than
@@ -190,18 +201,24 @@ def joint_wall_rows(
     q: FloatArray,
     v: FloatArray,
     qdd: FloatArray,
-    kp: float,
-    kd: float,
+    decel: float = WALL_DECEL,
+    tau: float = WALL_TAU,
 ) -> tuple[npt.NDArray[np.intp], FloatArray]:
     """The joints at velocity columns `cols` (k,) that `qdd` (nv,) would drive through their
-    working bounds `lower` / `upper` (k,), rad, and the acceleration (rad/s^2) each gets
-    instead: kp (bound - q_j) - kd qdot_j, a critically damped approach that stops at the
-    bound. Returns (columns, accelerations); empty when no joint is driven past its bound.
-    q in pinocchio's layout (joint j at q[7 + j], velocity column j + 6)."""
+    working bounds `lower` / `upper` (k,), rad (+-inf: no bound), and the acceleration
+    (rad/s^2) each gets instead: (v_allowed - qdot_j) / tau, v_allowed the speed towards the
+    bound from which `decel` (rad/s^2) still stops the joint at it, sqrt(2 decel distance)
+    (the same speed away from it once past the bound). Returns (columns, accelerations);
+    empty when no joint is driven past what it allows. q in pinocchio's layout (joint j at
+    q[7 + j], velocity column j + 6)."""
     qj = q[cols + 1]
     vj = v[cols]
-    a_hi = kp * (upper - qj) - kd * vj
-    a_lo = kp * (lower - qj) - kd * vj
+    to_hi = upper - qj
+    to_lo = qj - lower
+    v_hi = np.sign(to_hi) * np.sqrt(2.0 * decel * np.abs(to_hi))
+    v_lo = -np.sign(to_lo) * np.sqrt(2.0 * decel * np.abs(to_lo))
+    a_hi = (v_hi - vj) / tau
+    a_lo = (v_lo - vj) / tau
     a = qdd[cols]
     over = a > a_hi
     under = a < a_lo
@@ -523,22 +540,13 @@ class LocoManipulationController:
         v: FloatArray,
     ) -> tuple[FloatArray, FloatArray, FloatArray, npt.NDArray[np.int64], FloatArray]:
         """The task stack with a first level that stops each joint `qdd` would drive through
-        its working bound (`joint_wall_rows`, the posture gains), and the accelerations
+        its working bound (`joint_wall_rows`), and the accelerations
         solved again under it; the stack and `qdd` unchanged when no joint is driven there.
         The hands then follow their targets as far as the rest of the arm allows: on H1
         (`locoplan.robot.arm_range`) a hand pulled in from full reach bends the elbow the
         nominal way instead of straightening it through the singularity and folding it
         backwards onto its stop."""
-        cols, acc = joint_wall_rows(
-            self._cols_wall,
-            self._wall_lower,
-            self._wall_upper,
-            q,
-            v,
-            qdd,
-            self.s.posture_kp_acc,
-            self.s.posture_kd_acc,
-        )
+        cols, acc = joint_wall_rows(self._cols_wall, self._wall_lower, self._wall_upper, q, v, qdd)
         if not len(cols):
             return J_t, b_t, a_t, ends, qdd
         n = len(cols)
