@@ -151,5 +151,5 @@ def test_an_unbounded_side_never_walls() -> None:
     v = np.zeros(7)
     v[6] = -10.0
     qdd = np.full(7, -100.0)
-    hit, _ = joint_wall_rows(cols, np.array([-np.inf]), np.array([1.377]), q, v, qdd)
+    hit, _ = joint_wall_rows(cols, np.array([-np.inf]), np.array([1.377]), q, v, qdd, 337.0)
     assert len(hit) == 0

@@ -149,13 +149,15 @@ def rigid_pair_targets(targets: FloatArray, p_hands: FloatArray) -> FloatArray:
 
 
 # The wall that keeps a joint inside its working range (`joint_wall_rows`): the joint may
-# approach its bound no faster than it can stop there at WALL_DECEL (rad/s^2), and is brought
-# to that speed with the time constant WALL_TAU (s). A PD on the bound (kp 100, kd 20, the
-# posture gains) braked H1's elbow from 1.2 rad/s 0.15 rad before its bound, its hands lagged
-# the reach for a box at full reach, and the grasp closed late (envelope seed 41011,
-# transfer-026). 50 rad/s^2 is a seventh of what H1's elbow torque (18 N m) gives its forearm
-# (about 0.05 kg m^2); checked on H1 seeds 40009 and 41011.
-WALL_DECEL = 50.0
+# approach its bound no faster than it can stop there at WALL_TORQUE_SHARE of its torque
+# limit over its own inertia at the nominal pose (`Controller._wall_decel`; H1's elbow:
+# 0.5 x 18 N m / 0.027 kg m^2 = 337 rad/s^2), brought to that speed with the time constant
+# WALL_TAU (s). A PD on the bound (kp 100, kd 20, the posture gains) braked H1's elbow from
+# 1.2 rad/s 0.15 rad before its bound, its hands lagged the reach for a box at full reach
+# and the grasp closed late (envelope seed 41011, transfer-026); a fixed 50 rad/s^2 braked
+# it at 6 rad/s 1.4 rad away and changed the reach of seed 40009's side-carry-013 (not
+# placed). Half the torque leaves the rest for the arm's weight and a held load.
+WALL_TORQUE_SHARE = 0.5
 WALL_TAU = 0.05
 
 
@@ -201,16 +203,16 @@ def joint_wall_rows(
     q: FloatArray,
     v: FloatArray,
     qdd: FloatArray,
-    decel: float = WALL_DECEL,
+    decel: FloatArray | float,
     tau: float = WALL_TAU,
 ) -> tuple[npt.NDArray[np.intp], FloatArray]:
     """The joints at velocity columns `cols` (k,) that `qdd` (nv,) would drive through their
     working bounds `lower` / `upper` (k,), rad (+-inf: no bound), and the acceleration
     (rad/s^2) each gets instead: (v_allowed - qdot_j) / tau, v_allowed the speed towards the
-    bound from which `decel` (rad/s^2) still stops the joint at it, sqrt(2 decel distance)
-    (the same speed away from it once past the bound). Returns (columns, accelerations);
-    empty when no joint is driven past what it allows. q in pinocchio's layout (joint j at
-    q[7 + j], velocity column j + 6)."""
+    bound from which `decel` (rad/s^2, per joint or one for all) still stops the joint at
+    it, sqrt(2 decel distance) (the same speed away from it once past the bound). Returns
+    (columns, accelerations); empty when no joint is driven past what it allows. q in
+    pinocchio's layout (joint j at q[7 + j], velocity column j + 6)."""
     qj = q[cols + 1]
     vj = v[cols]
     to_hi = upper - qj
@@ -499,6 +501,9 @@ class LocoManipulationController:
         self._cols_wall = walled.astype(np.intp) + 6
         self._wall_lower = np.where(narrowed_lo, lower, -np.inf)[walled]
         self._wall_upper = np.where(narrowed_hi, upper, np.inf)[walled]
+        robot.update(_nominal_q(robot, desc), np.zeros(robot.nv))
+        inertia = np.diag(robot.M)[walled + 6]
+        self._wall_decel = WALL_TORQUE_SHARE * self.tau_limits[walled] / inertia
         # Frames read every tick, in `step`'s order: feet, hands, trunk.
         self._frames = (*desc.foot_frames, *desc.hand_frames, desc.trunk_body)
         s = self.s
@@ -546,7 +551,9 @@ class LocoManipulationController:
         (`locoplan.robot.arm_range`) a hand pulled in from full reach bends the elbow the
         nominal way instead of straightening it through the singularity and folding it
         backwards onto its stop."""
-        cols, acc = joint_wall_rows(self._cols_wall, self._wall_lower, self._wall_upper, q, v, qdd)
+        cols, acc = joint_wall_rows(
+            self._cols_wall, self._wall_lower, self._wall_upper, q, v, qdd, self._wall_decel
+        )
         if not len(cols):
             return J_t, b_t, a_t, ends, qdd
         n = len(cols)
