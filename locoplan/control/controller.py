@@ -150,9 +150,10 @@ def rigid_pair_targets(targets: FloatArray, p_hands: FloatArray) -> FloatArray:
 
 # The wall that keeps a joint inside its working range (`joint_wall_rows`): the joint may
 # approach its bound no faster than it can stop there at WALL_TORQUE_SHARE of its torque
-# limit over its own inertia at the nominal pose (`Controller._wall_decel`; H1's elbow:
-# 0.5 x 18 N m / 0.027 kg m^2 = 337 rad/s^2), brought to that speed with the time constant
-# WALL_TAU (s). A PD on the bound (kp 100, kd 20, the posture gains) braked H1's elbow from
+# limit over its own inertia at the nominal pose (`LocoManipulationController._wall_decel`;
+# H1's elbow: 0.5 x 18 N m / 0.027 kg m^2 = 337 rad/s^2), brought to that speed with the
+# time constant WALL_TAU (s). Checked on H1 envelope seeds 40009, 41011 and 42013. A PD on
+# the bound (kp 100, kd 20, the posture gains) braked H1's elbow from
 # 1.2 rad/s 0.15 rad before its bound, its hands lagged the reach for a box at full reach
 # and the grasp closed late (envelope seed 41011, transfer-026); a fixed 50 rad/s^2 braked
 # it at 6 rad/s 1.4 rad away and changed the reach of seed 40009's side-carry-013 (not
@@ -501,9 +502,11 @@ class LocoManipulationController:
         self._cols_wall = walled.astype(np.intp) + 6
         self._wall_lower = np.where(narrowed_lo, lower, -np.inf)[walled]
         self._wall_upper = np.where(narrowed_hi, upper, np.inf)[walled]
-        robot.update(_nominal_q(robot, desc), np.zeros(robot.nv))
-        inertia = np.diag(robot.M)[walled + 6]
-        self._wall_decel = WALL_TORQUE_SHARE * self.tau_limits[walled] / inertia
+        self._wall_decel = np.zeros(len(walled))
+        if len(walled):
+            robot.update(_nominal_q(robot, desc), np.zeros(robot.nv))
+            inertia = np.diag(robot.M)[walled + 6]
+            self._wall_decel = WALL_TORQUE_SHARE * self.tau_limits[walled] / inertia
         # Frames read every tick, in `step`'s order: feet, hands, trunk.
         self._frames = (*desc.foot_frames, *desc.hand_frames, desc.trunk_body)
         s = self.s
