@@ -47,7 +47,7 @@ from locoplan.control.wbc import (
 from locoplan.control.wbc_kernels import stack_tasks
 from locoplan.exceptions import SolverFailure
 from locoplan.plan import ObjectHold, Plan
-from locoplan.robot.arm_range import working_range
+from locoplan.robot.arm_range import narrowed_bounds, working_range
 from locoplan.robot.conventions import pin_base_rotation
 from locoplan.robot.description import RobotDescription
 from locoplan.robot.pinocchio_model import PinocchioRobot
@@ -495,13 +495,11 @@ class LocoManipulationController:
         # Only the narrowed side is walled: MuJoCo's joint limit holds the MJCF side, and a
         # wall there braked H1's elbow from 10 rad/s 1.3 rad before its -1.25 rad stop in
         # the tuck, which threw the arms about (envelope seed 41011, side-carry-003, fell).
-        lower, upper = working_range(robot)
-        narrowed_lo = lower > np.asarray(desc.q_lower)
-        narrowed_hi = upper < np.asarray(desc.q_upper)
-        walled = np.flatnonzero(narrowed_lo | narrowed_hi)
+        wall_lo, wall_hi = narrowed_bounds(desc, *working_range(robot))
+        walled = np.flatnonzero(np.isfinite(wall_lo) | np.isfinite(wall_hi))
         self._cols_wall = walled.astype(np.intp) + 6
-        self._wall_lower = np.where(narrowed_lo, lower, -np.inf)[walled]
-        self._wall_upper = np.where(narrowed_hi, upper, np.inf)[walled]
+        self._wall_lower = wall_lo[walled]
+        self._wall_upper = wall_hi[walled]
         self._wall_decel = np.zeros(len(walled))
         if len(walled):
             robot.update(_nominal_q(robot, desc), np.zeros(robot.nv))

@@ -17,7 +17,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from locoplan.robot.arm_range import working_range
+from locoplan.robot.arm_range import narrowed_bounds, working_range
 from locoplan.robot.description import RobotDescription
 from locoplan.robot.pinocchio_model import PinocchioRobot
 
@@ -96,9 +96,8 @@ class StancePostures:
         # the nominal side of the straight arm, so the postures here do too.
         self.q_lower, self.q_upper = working_range(robot)
         # The joints whose working range is narrower than their MJCF range (H1's elbows).
-        self._walled = (self.q_lower > np.asarray(desc.q_lower)) | (
-            self.q_upper < np.asarray(desc.q_upper)
-        )
+        narrowed_lo, narrowed_hi = narrowed_bounds(desc, self.q_lower, self.q_upper)
+        self._walled = np.isfinite(narrowed_lo) | np.isfinite(narrowed_hi)
         self.model = robot.model
         self.data = self.model.createData()
         self.mass = robot.total_mass

@@ -29,6 +29,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
+from locoplan.robot.description import RobotDescription
 from locoplan.robot.pinocchio_model import PinocchioRobot
 
 FloatArray = NDArray[np.float64]
@@ -48,27 +49,22 @@ _SAMPLES = 97
 _GOLDEN_STEPS = 40
 
 
-def _hand_distance(robot: PinocchioRobot, data: pin.Data, q: FloatArray, hand: int) -> float:
-    model, desc = robot.model, robot.desc
-    pin.framesForwardKinematics(model, data, q)
-    first = model.getJointId(desc.joint_names[int(desc.arm_joint_indices[hand][0])])
-    hand_id = robot.frame_id(desc.hand_frames[hand])
-    return float(np.linalg.norm(data.oMf[hand_id].translation - data.oMi[first].translation))
-
-
 def straight_arm_angle(robot: PinocchioRobot, hand: int, joint: int) -> float | None:
     """The angle (rad) of arm joint `joint` (index into the joints) of arm `hand` (0 left,
     1 right) at which the arm is straight (the largest shoulder-to-hand distance, the other
     joints nominal), or None when the joint does not fold the arm or the largest distance is
     at an end of its range."""
-    desc = robot.desc
+    model, desc = robot.model, robot.desc
     lo, hi = float(desc.q_lower[joint]), float(desc.q_upper[joint])
     q = robot.nominal_q()
-    data = robot.model.createData()
+    data = model.createData()
+    first = model.getJointId(desc.joint_names[int(desc.arm_joint_indices[hand][0])])
+    hand_id = robot.frame_id(desc.hand_frames[hand])
 
     def dist(angle: float) -> float:
         q[7 + joint] = angle
-        return _hand_distance(robot, data, q, hand)
+        pin.framesForwardKinematics(model, data, q)
+        return float(np.linalg.norm(data.oMf[hand_id].translation - data.oMi[first].translation))
 
     angles = np.linspace(lo, hi, _SAMPLES)
     d = np.array([dist(a) for a in angles])
@@ -103,3 +99,14 @@ def working_range(robot: PinocchioRobot) -> tuple[FloatArray, FloatArray]:
             else:
                 lower[j] = max(lower[j], straight + STRAIGHT_MARGIN)
     return lower, upper
+
+
+def narrowed_bounds(
+    desc: RobotDescription, lower: FloatArray, upper: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """The working bounds (`working_range`'s `lower`, `upper`) where they are narrower than
+    the MJCF range, -inf / inf where they are the MJCF range (which MuJoCo's joint limit
+    holds): what the controller walls, and where the static IK re-solves a blocked step."""
+    lo = np.where(lower > np.asarray(desc.q_lower), lower, -np.inf)
+    hi = np.where(upper < np.asarray(desc.q_upper), upper, np.inf)
+    return lo, hi
