@@ -191,7 +191,36 @@ def test_hand_target_arrays_stack_hand_targets_at() -> None:
     for t in np.linspace(0.0, plan.t_end, 37).tolist():
         pose = ([0.1, -0.2, 0.6], 0.3, [0.2, 0.1, 0.0], 0.4)
         want = plan.hand_targets_at(t, *pose)
-        pos, vel = plan.hand_target_arrays(t, *pose)
+        pos, vel, _ = plan.hand_target_arrays(t, *pose)
         # The same float arithmetic, stacked differently.
         np.testing.assert_array_equal(pos, want.positions)
         np.testing.assert_array_equal(vel, want.velocities)
+
+
+@pytest.mark.parametrize("name", ["pick-walk-drop", "throw", "package-transfer"])
+def test_hand_target_accelerations_are_the_derivative_of_their_velocities(name: str) -> None:
+    """The hands' feed-forward (`HandTrack.acceleration`) against a central difference of the
+    target velocity, with the trunk moving at a constant velocity and yaw rate (what the
+    feed-forward assumes): h = 1e-5 s leaves an O(h^2 jerk') truncation error and an
+    O(eps |v| / h) rounding error, both far below the 1e-4 m/s^2 + 1e-5 relative allowed.
+    Times within 2h of a segment's ends are skipped (the acceleration of a "world" to "trunk"
+    blend is continuous there, but a difference across a boundary mixes two segments)."""
+    plan = compile_plan(repo_scenario(name))
+    base0, v_b, yaw0, w_b = np.array([0.1, -0.2, 0.6]), np.array([0.2, -0.1, 0.0]), 0.3, 0.7
+    h = 1e-5
+    bounds = np.array(
+        [b for tr in plan.manipulation.tracks for g in tr.segments for b in (g.t0, g.t1)]
+    )
+
+    def arrays(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return plan.hand_target_arrays(t, base0 + v_b * t, yaw0 + w_b * t, v_b, w_b)
+
+    checked = 0
+    for t in np.linspace(0.0, plan.t_end, 401).tolist():
+        if np.min(np.abs(bounds - t)) < 2 * h:
+            continue
+        _, _, acc = arrays(t)
+        fd = (arrays(t + h)[1] - arrays(t - h)[1]) / (2 * h)
+        np.testing.assert_allclose(acc, fd, rtol=1e-5, atol=1e-4)
+        checked += 1
+    assert checked > 350

@@ -61,7 +61,7 @@ LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (g
 # only in the last moments before the release, and carrying it while the controller already
 # thinks it lighter made the hands sag and the robot fall forward after placing it.
 LOAD_RAMP_DOWN = 0.6  # s
-# Time constants of the hands' Cartesian PD (1/sqrt(kp), 50 ms at kp 400) over which a
+# Time constants of the holding hands' Cartesian PD (1/sqrt(kp), 50 ms at kp 400) over which a
 # two-hand release eases the pair's separation back to the plan's (`_released_pair_targets`):
 # 4 is the PD's settling time (2 %). Checked on the throws of envelope seeds 4711 and 27182
 # (40 of 40 as before), 16180's throw-000 (fell without it) and the 276 manipulation scripts
@@ -354,8 +354,8 @@ class ControllerSettings:
 
     The posture gains (1/s^2, 1/s) hold the joints no task determines
     (`posture_joint_indices`) at the nominal pose, as accelerations, so the same numbers
-    serve any robot's inertia: kp 100 is a 10 rad/s bandwidth, half the hands' (kp 400), and
-    kd = 2 sqrt(kp) damps it critically. HECTOR has no such joint and never uses them.
+    serve any robot's inertia: kp 100 is a 10 rad/s bandwidth, a quarter of the hands' (kp
+    1500), and kd = 2 sqrt(kp) damps it critically. HECTOR has no such joint and never uses them.
 
     Where these were checked: set on HECTOR (17 kg, trunk 0.60 m above the soles, foot
     0.15 m); the same numbers stand, step, walk, side-step and turn H1 (51.4 kg, 0.98 m,
@@ -395,8 +395,25 @@ class ControllerSettings:
     swing_kd_rot: float = 80.0
     swing_height: float = 0.08
     raibert_gain: float = 0.05
-    hand_kp_acc: float = 400.0
-    hand_kd_acc: float = 40.0
+    # Free hands (not in contact with an object): as fast as the trunk's stiffest attitude
+    # axis (kp 1500, 38.7 rad/s), critically damped. Why: the WBC QP relaxes the floating
+    # base's accelerations, not the joints', so whatever the trunk's rotation misses of its
+    # command the hands inherit through the arm, times the lever from the trunk to the hand;
+    # a hand PD slower than the trunk's attitude loop lets that error outlast its cause. At
+    # kp 400 (20 rad/s) H1's hands were 3-5 cm inward of their reach while the trunk turned
+    # at 60 deg/s in steps (yaw bursts of 140 deg/s) and struck the parcel they were going
+    # round (envelope seed 42013, transfer-044 and -053: pushed 7 cm along the table, not
+    # grasped); at kp 1500 the same reaches are within 1-1.5 cm and both parcels are placed.
+    hand_kp_acc: float = 1500.0
+    hand_kd_acc: float = 2.0 * math.sqrt(1500.0)
+    # Hands in contact with an object: kp 400 (20 rad/s), critically damped. A holding hand's
+    # PD accelerates the object too (`_object_generalized_force` feeds m_o a forward), so its
+    # stiffness costs the object's mass times kp per metre of error: at kp 1500 a 10 kg block
+    # sagging 2 cm at the grip asked for 30 m/s^2 (300 N) through HECTOR's arms, the shoulder
+    # pitches saturated and the block went back on its table
+    # (tests/test_manipulation.py::test_holds_ten_kilograms_standing).
+    hand_kp_hold: float = 400.0
+    hand_kd_hold: float = 40.0
     hand_kp_force: float = 300.0
     hand_kd_force: float = 20.0
     posture_kp_acc: float = 100.0
@@ -475,7 +492,7 @@ class LocoManipulationController:
         self._mass_shift = 0.0
         # Last two-hand hold: (time, offset (3,) m of the pair's separation from the plan's).
         self._pair_release: tuple[float, FloatArray] = (-math.inf, np.zeros(3))
-        self._pair_blend = RELEASE_BLEND_TAU_RATIO / math.sqrt(self.s.hand_kp_acc)
+        self._pair_blend = RELEASE_BLEND_TAU_RATIO / math.sqrt(self.s.hand_kp_hold)
         self._hold_mass = sum(h.mass for h in plan.holds)
         starts = {task.index: task.start for task in plan.tasks}
         self._drop_windows = [
@@ -518,8 +535,9 @@ class LocoManipulationController:
             s.swing_kp_rot,
             s.swing_kd_rot,
         ).packed()
-        self._hand_kp = s.hand_kp_acc
-        self._hand_kd = s.hand_kd_acc
+        # Per hand (left, right): the free or the holding gains (`_hand_gains`).
+        self._hand_kp = np.full((2, 1), s.hand_kp_acc)
+        self._hand_kd = np.full((2, 1), s.hand_kd_acc)
         if s.mapping == "wbc":
             wbc_kernels.warm_up(robot.nv)
         self._nominal_geometry()
@@ -1310,7 +1328,7 @@ class LocoManipulationController:
             swing_yaw[n_swing] = yaw_des
             n_swing += 1
         # Hand targets.
-        hand_targets, v_hand_des = plan.hand_target_arrays(
+        hand_targets, v_hand_des, a_hand_des = plan.hand_target_arrays(
             t, q[:3], yaw, R.dot(v[:3]), float(omega_w[2])
         )
         J_hands = np.ascontiguousarray(J_fr[2:4, :3])
@@ -1326,6 +1344,7 @@ class LocoManipulationController:
             # after it (envelope seed 4711, walk-carry-003).
             hand_targets, v_hand_des = hand_targets.copy(), v_hand_des.copy()
             for k in plan.holding_hands(t):
+                a_hand_des[k] = 0.0
                 if hand_targets[k, 2] < p_hands[k, 2]:
                     hand_targets[k, 2] = p_hands[k, 2]
                     v_hand_des[k, 2] = max(0.0, float(v_hand_des[k, 2]))
@@ -1337,7 +1356,12 @@ class LocoManipulationController:
             self._pair_release = (t, hand_targets[0] - hand_targets[1] - gap)
         elif math.isfinite(self._pair_release[0]):
             hand_targets = self._released_pair_targets(t, hand_targets)
-        hand_acc = self._hand_kp * (hand_targets - p_hands) + self._hand_kd * (v_hand_des - v_hands)
+        self._hand_gains(t)
+        hand_acc = (
+            a_hand_des
+            + self._hand_kp * (hand_targets - p_hands)
+            + self._hand_kd * (v_hand_des - v_hands)
+        )
         tau_ext = self._object_generalized_force(t, mass_now, J_hands, hand_acc)
 
         t_w = time.perf_counter()
@@ -1441,6 +1465,18 @@ class LocoManipulationController:
         )
 
     # -- pieces ---------------------------------------------------------------------------------
+    def _hand_gains(self, t: float) -> None:
+        """Set each hand's PD gains for time t: the holding ones while it presses on an object
+        (its squeeze, `ControllerSettings.hand_kp_hold`) or holds it, the free ones otherwise.
+        A squeezing hand's target lies inside the object's side, so its PD error is the press
+        and its stiffness the squeeze force: squeezed at the free gains, HECTOR's 14 kg block
+        (scenarios/standing-load.yaml) was set back on its table within a second of its lift."""
+        tracks = self.plan.manipulation.tracks
+        for k in range(2):
+            hold = self.plan.hand_contact(k, t) or tracks[k].label_at(t) == "squeeze"
+            self._hand_kp[k, 0] = self.s.hand_kp_hold if hold else self.s.hand_kp_acc
+            self._hand_kd[k, 0] = self.s.hand_kd_hold if hold else self.s.hand_kd_acc
+
     def _object_generalized_force(
         self, t: float, mass: float, J_hands: FloatArray, hand_acc: FloatArray
     ) -> FloatArray:

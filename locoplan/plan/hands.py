@@ -16,7 +16,7 @@ import bisect
 from dataclasses import dataclass
 from typing import Literal
 
-from locoplan.plan.profiles import hermite
+from locoplan.plan.profiles import hermite, hermite_second
 
 Frame = Literal["trunk", "world"]
 Vec3 = tuple[float, float, float]
@@ -84,6 +84,21 @@ def _to_world(w: HandWaypoint, b: BasePose) -> tuple[Vec3, Vec3, Vec3, Vec3]:
     )
 
 
+def _turning(w: HandWaypoint, b: BasePose) -> tuple[Vec3, Vec3]:
+    """Accelerations (m/s^2) of a waypoint's world point and of its velocity vector due to the
+    trunk's motion, for a trunk moving at its present velocity and yaw rate (its own
+    accelerations are not measured: the centripetal terms only); zero for a "world" waypoint."""
+    if w.frame == "world":
+        return ZERO3, ZERO3
+    px, py, _ = w.point
+    ux, uy, _ = w.velocity
+    w2 = b.wz * b.wz
+    return (
+        (-w2 * (b.c * px - b.s * py), -w2 * (b.s * px + b.c * py), 0.0),
+        (-w2 * (b.c * ux - b.s * uy), -w2 * (b.s * ux + b.c * uy), 0.0),
+    )
+
+
 @dataclass(frozen=True, slots=True, eq=False)
 class HandTrack:
     """The target of one hand over the whole plan: `initial` waypoint, then `segments`
@@ -136,6 +151,48 @@ class HandTrack:
             + T * (g0 * du0[2] + g1 * du1[2]),
         )
         return pos, vel
+
+    def acceleration(self, t: float, b: BasePose) -> Vec3:
+        """World acceleration (m/s^2) of the hand target at time t: the second time derivative
+        of `evaluate`'s position with the trunk moving at `b`'s velocity and yaw rate (the
+        hands' feed-forward: a Cartesian PD without it lags a quintic reach by its
+        acceleration over kp, 2-7 cm at kp 400 for H1's 0.25-0.6 s reaches)."""
+        k = bisect.bisect_right(self._t0_list, t) - 1
+        if k < 0:
+            return _turning(self.initial, b)[0]
+        g = self.segments[k]
+        if t >= g.t1:
+            return _turning(g.end, b)[0]
+        T = g.t1 - g.t0
+        tau = (t - g.t0) / T
+        s, ds, g0, dg0, g1, dg1 = hermite(tau)
+        dds, ddg0, ddg1 = hermite_second(tau)
+        p0, q0, u0, du0 = _to_world(g.start, b)
+        p1, q1, u1, du1 = _to_world(g.end, b)
+        a0, ddu0 = _turning(g.start, b)
+        a1, ddu1 = _turning(g.end, b)
+        r = 1.0 - s
+        sdot = ds / T
+        sddot = dds / (T * T)
+        out = [0.0, 0.0, 0.0]
+        for i in range(3):
+            out[i] = (
+                r * a0[i]
+                + s * a1[i]
+                + 2.0 * sdot * (q1[i] - q0[i])
+                + sddot * (p1[i] - p0[i])
+                + (ddg0 * u0[i] + ddg1 * u1[i]) / T
+                + 2.0 * (dg0 * du0[i] + dg1 * du1[i])
+                + T * (g0 * ddu0[i] + g1 * ddu1[i])
+            )
+        return out[0], out[1], out[2]
+
+    def label_at(self, t: float) -> str | None:
+        """The label of the segment under way at t (s), None between and outside segments."""
+        k = bisect.bisect_right(self._t0_list, t) - 1
+        if k < 0 or t >= self.segments[k].t1:
+            return None
+        return self.segments[k].label
 
     def last_waypoint(self) -> HandWaypoint:
         """Where the hand rests after its last segment."""

@@ -63,6 +63,17 @@ def hermite(tau: float) -> tuple[float, float, float, float, float, float]:
     return s, ds, g0, dg0, g1, dg1
 
 
+def hermite_second(tau: float) -> tuple[float, float, float]:
+    """Second derivatives with respect to tau of `hermite`'s s, g0 and g1 at tau (clipped to
+    [0, 1]): (d2s, d2g0, d2g1). All three are zero at both ends."""
+    p = 0.0 if tau < 0.0 else (1.0 if tau > 1.0 else tau)
+    p2 = p * p
+    dds = 60.0 * p * (1.0 - p) * (1.0 - 2.0 * p)
+    ddg0 = -36.0 * p + 96.0 * p2 - 60.0 * p2 * p
+    ddg1 = -24.0 * p + 84.0 * p2 - 60.0 * p2 * p
+    return dds, ddg0, ddg1
+
+
 # Ramp fraction of `cruise`: the velocity rises over the first CRUISE_RAMP of a walk or turn
 # and falls over the last. At 1/2 there is no cruise left and the peak s' (2) exceeds the
 # min-jerk blend's; at 1/3 the peak s' is 1.5 and the peak s'' 1.17x min-jerk's. Ramps of one
