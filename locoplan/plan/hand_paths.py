@@ -44,10 +44,10 @@ def tuck_waypoint(hand: int, width: float, geo: PlanGeometry = HECTOR_GEOMETRY) 
 _QUINTIC_PEAK = 10.0 / math.sqrt(3.0)
 
 
-def rest_to_rest_duration(distance: float, accel: float = k.HAND_ACCEL_LIMIT) -> float:
+def rest_to_rest_duration(distance: float, accel: float) -> float:
     """Shortest duration (s) of a rest-to-rest hand move over `distance` (m) whose peak
-    acceleration, 10 / sqrt(3) d / T^2 for the tracks' quintic, stays within `accel` (m/s^2,
-    HAND_ACCEL_LIMIT unless given)."""
+    acceleration, 10 / sqrt(3) d / T^2 for the tracks' quintic, stays within `accel` (m/s^2;
+    the robot's `PlanGeometry.hand_accel_limit` for a free move)."""
     return math.sqrt(_QUINTIC_PEAK * max(distance, 0.0) / accel)
 
 
@@ -159,11 +159,13 @@ def settle_in(
     return min(distance, rest_to_rest_distance(available, accel)), available
 
 
-def pull_accel(mass: float) -> float:
+def pull_accel(mass: float, geo: PlanGeometry = HECTOR_GEOMETRY) -> float:
     """Peak acceleration (m/s^2) of a held object of `mass` (kg) pulled in towards the trunk
-    (`carry_in`): the arms and the object then push the trunk with (ARM_MOVING_MASS + mass) a,
-    held to the force HAND_ACCEL_LIMIT gives the empty arms (constants' docstring)."""
-    return k.HAND_ACCEL_LIMIT * k.ARM_MOVING_MASS / (k.ARM_MOVING_MASS + max(mass, 0.0))
+    (`carry_in`): the arms and the object then push the trunk with (arm_moving_mass + mass) a,
+    held to the force hand_accel_limit gives the empty arms (`geo`'s; constants'
+    HAND_ACCEL_LIMIT and ARM_MOVING_MASS)."""
+    m_arm = geo.arm_moving_mass
+    return geo.hand_accel_limit * m_arm / (m_arm + max(mass, 0.0))
 
 
 def heavy_pull(mass: float, ahead: float, leg_torque: float) -> bool:
@@ -287,7 +289,7 @@ def approach_segments(
         """From `frm` at t_r to the target at t_end: straight, or by way of `via`."""
         if via is None:
             return [HandSegment(t_r, t_end, frm, target, task_index, "reach")]
-        return _entry_finish(t_r, t_end, frm, via, target, task_index)
+        return _entry_finish(t_r, t_end, frm, via, target, task_index, geo.hand_accel_limit)
 
     direct = finish(start, cur, None)
     # Per obstacle: a hand that starts within APPROACH_CLEARANCE of one only has to get no
@@ -314,7 +316,7 @@ def approach_segments(
     # table's near edge with the hands: envelope seed 11, standing-hold-010 fell backwards.)
     tx, _, tz = geo.hand_tuck_in_trunk
     if cur.frame == "trunk" and abs(cur.point[0] - tx) + abs(cur.point[2] - tz) < 1e-9:
-        tuck_time = rest_to_rest_duration(math.dist(cur.point, tuck.point))
+        tuck_time = rest_to_rest_duration(math.dist(cur.point, tuck.point), geo.hand_accel_limit)
     else:
         tuck_time = k.TUCK_DURATION
     # Latest tuck first (the hands stay out as long as they can), then earlier ones; for each,
@@ -342,13 +344,15 @@ def approach_segments(
             moves = (
                 [HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")] if tuck_time else []
             )
-            t_first = t_tuck1 + k.TUCK_LIFT_DURATION
+            t_first = t_tuck1 + geo.tuck_lift_duration
             n = int((t_end - k.REACH_MIN_DURATION - t_first) / k.REACH_START_STEP + 1e-9)
             for j in range(n + 1):
                 t_r = t_first + j * k.REACH_START_STEP
                 cand = [
                     *moves,
-                    HandSegment(t_r - k.TUCK_LIFT_DURATION, t_r, tuck, lifted, task_index, "lift"),
+                    HandSegment(
+                        t_r - geo.tuck_lift_duration, t_r, tuck, lifted, task_index, "lift"
+                    ),
                     *finish(t_r, lifted, via),
                 ]
                 c = gap(cand, t_tuck0, t_end, threshold, give_up_below=best_gap)
@@ -379,11 +383,12 @@ def _entry_finish(
     entry: HandWaypoint,
     target: HandWaypoint,
     task_index: int,
+    accel: float,
 ) -> list[HandSegment]:
     """`frm` at t_r to `entry`, then a slide along the object's side to `target` at t_end (s):
-    the slide takes what a rest-to-rest move of its length needs at HAND_ACCEL_LIMIT, at most
-    half of the time there is (both are "world" points)."""
-    slide = rest_to_rest_duration(math.dist(entry.point, target.point))
+    the slide takes what a rest-to-rest move of its length needs at `accel` (m/s^2, the
+    robot's hand_accel_limit), at most half of the time there is (both are "world" points)."""
+    slide = rest_to_rest_duration(math.dist(entry.point, target.point), accel)
     t_s = t_end - min(slide, 0.5 * (t_end - t_r))
     return [
         HandSegment(t_r, t_s, frm, entry, task_index, "reach"),

@@ -393,7 +393,7 @@ class _Builder:
         # The next task that uses the hands (inf if none): the carry move, the heavy pull and
         # the settling-in end by then.
         t_settle = self.next_use(task)
-        accel = pull_accel(obj.mass)
+        accel = pull_accel(obj.mass, geom)
         raise_accel = accel
         if moving:
             target = carry_in(support_half_width(obj, oyaw, ax, ay), geom)
@@ -652,14 +652,15 @@ class _Builder:
             # Opening and retreat no faster than the feet can answer the arms' reaction
             # (rest_to_rest_duration); the retreat may run past the drop's end while the
             # hands have nothing else to do.
-            h_open = max(t_open, t_release + rest_to_rest_duration(math.dist(put, opened)))
+            free = self.geom.hand_accel_limit
+            h_open = max(t_open, t_release + rest_to_rest_duration(math.dist(put, opened), free))
             self.add(h, HandSegment(t_release, h_open, w_put, w_open, i, "open"))
             tuck = tuck_waypoint(h, self.geom.hand_tuck_in_trunk[1], self.geom).point
             opened_in_trunk = world_to_trunk(self.trunk, h_open, opened)
             # The retreat goes back along the object first when a straight one would pass
             # close to it: up to about 1.4 times the straight distance.
             span = 1.4 * math.dist(opened_in_trunk, tuck)
-            h_end = max(task.end, h_open + rest_to_rest_duration(span))
+            h_end = max(task.end, h_open + rest_to_rest_duration(span, free))
             h_end = max(min(h_end, self.next_hand_use(h, task.end)), task.end, h_open + 0.05)
             for seg in retreat_segments(
                 h,
@@ -705,7 +706,7 @@ class _Builder:
         16 m/s^2; the MPC's external force (-m_o a_o) then swung by 80-180 N within 0.1 s,
         and its plan sank the robot (envelope seed 6161, transfer-050: vertical forces
         100 N under the weight before the release, fell)."""
-        accel = pull_accel(hold.mass)
+        accel = pull_accel(hold.mass, self.geom)
         lower = max(
             rest_to_rest_duration(geo.points[h][1][2] - geo.points[h][0][2], accel)
             for h in hold.hands

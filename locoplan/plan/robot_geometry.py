@@ -46,7 +46,10 @@ class PlanGeometry:
     behind its hip in a gait period (the feasibility check's walk-speed bound);
     `hip_yaw_range`: the hip yaw joint's range either side of straight ahead (its turn-rate
     bound); `footprint_radius`: the radius around the start position that the feet occupy
-    (an object there overlaps the robot)."""
+    (an object there overlaps the robot). `hand_accel_limit` (m/s^2), `arm_moving_mass`
+    (kg), `tuck_lift_duration` (s): the arms' free-move acceleration, their moving mass and
+    the tucked hand's rise (constants' HAND_ACCEL_LIMIT, ARM_MOVING_MASS,
+    TUCK_LIFT_DURATION)."""
 
     base_height: float = 0.60
     foot_width: float = 0.2
@@ -61,6 +64,9 @@ class PlanGeometry:
     walk_stride: float = k.WALK_STRIDE
     hip_yaw_range: float = k.HIP_YAW_RANGE
     footprint_radius: float = k.ROBOT_FOOTPRINT_RADIUS
+    hand_accel_limit: float = k.HAND_ACCEL_LIMIT
+    arm_moving_mass: float = k.ARM_MOVING_MASS
+    tuck_lift_duration: float = k.TUCK_LIFT_DURATION
 
     def __post_init__(self) -> None:
         for name in (
@@ -74,6 +80,9 @@ class PlanGeometry:
             "walk_stride",
             "hip_yaw_range",
             "footprint_radius",
+            "hand_accel_limit",
+            "arm_moving_mass",
+            "tuck_lift_duration",
         ):
             value = getattr(self, name)
             if not (value > 0.0 and math.isfinite(value)):
@@ -106,7 +115,8 @@ def plan_geometry(desc: RobotDescription) -> PlanGeometry:
     `nominal.trunk_height`), foothold spacing (`stance_width`), hand radius
     (`contacts.hand_radius`), the grasp tolerance 1 cm beyond it (GRASP_BEYOND_TOUCH) and
     the pre-grasp clearance 3 cm beyond it (GRASP_SPHERE_GAP),
-    the `planner` section's hand poses, carry, throw, trunk front and gait limits, and the
+    the `planner` section's hand poses, carry, throw, trunk front, gait limits and arm
+    figures, and the
     feet's footprint radius around the start position, hypot(foot.toe, stance_width / 2)
     (the toe of a foot half the stance width off the centre line). For HECTOR's description
     every figure equals HECTOR_GEOMETRY's."""
@@ -125,4 +135,7 @@ def plan_geometry(desc: RobotDescription) -> PlanGeometry:
         walk_stride=p.walk_stride,
         hip_yaw_range=p.hip_yaw_range,
         footprint_radius=math.hypot(desc.foot_toe, desc.stance_width / 2.0),
+        hand_accel_limit=p.hand_accel_limit,
+        arm_moving_mass=p.arm_moving_mass,
+        tuck_lift_duration=p.tuck_lift_duration,
     )

@@ -45,6 +45,9 @@ DEFAULT_THROW_STOP_OFFSET = 0.16  # m
 DEFAULT_TRUNK_FRONT = 0.07  # m
 DEFAULT_WALK_STRIDE = 0.18  # m
 DEFAULT_HIP_YAW_RANGE_DEG = 30.0  # deg
+DEFAULT_HAND_ACCEL_LIMIT = 9.0  # m/s^2 (constants.HAND_ACCEL_LIMIT)
+DEFAULT_ARM_MOVING_MASS = 1.0  # kg (constants.ARM_MOVING_MASS)
+DEFAULT_TUCK_LIFT_DURATION = 0.3  # s (constants.TUCK_LIFT_DURATION)
 # The rigid body of the controller's MPC (robot.yaml `mpc_body`; `locoplan.control.controller.
 # mpc_body_inertia`): "composite", the whole robot's locked-joint inertia at the nominal pose
 # (HECTOR, the default), or "upper-body", the inertia of every body outside the legs about
@@ -80,7 +83,12 @@ class PlannerFigures:
     `throw_stop_offset`: a throw's follow-through beyond the carry pose; `trunk_front`: the
     trunk's front face ahead of its origin; `walk_stride`: how far a stance foot may move
     ahead of or behind its hip in one gait period; `hip_yaw_range`: the hip yaw joint's
-    range either side of straight ahead."""
+    range either side of straight ahead. `hand_accel_limit` (m/s^2): the peak acceleration of
+    the hands' free moves (opening, retreat, tuck, slide), `arm_moving_mass` (kg): the arms'
+    share of the mass those moves accelerate (with a held object's, it sets a pull-in's
+    acceleration), `tuck_lift_duration` (s): the rise from the tucked pose to a reach's
+    height (constants' HAND_ACCEL_LIMIT, ARM_MOVING_MASS and TUCK_LIFT_DURATION say how each
+    scales from HECTOR's)."""
 
     hand_default: tuple[float, float, float] = DEFAULT_HAND_DEFAULT
     hand_tuck: tuple[float, float, float] = DEFAULT_HAND_TUCK
@@ -89,6 +97,9 @@ class PlannerFigures:
     trunk_front: float = DEFAULT_TRUNK_FRONT
     walk_stride: float = DEFAULT_WALK_STRIDE
     hip_yaw_range: float = math.radians(DEFAULT_HIP_YAW_RANGE_DEG)
+    hand_accel_limit: float = DEFAULT_HAND_ACCEL_LIMIT
+    arm_moving_mass: float = DEFAULT_ARM_MOVING_MASS
+    tuck_lift_duration: float = DEFAULT_TUCK_LIFT_DURATION
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -430,6 +441,9 @@ def _planner(node: _Reader) -> PlannerFigures:
         trunk_front=node.get_positive_or("trunk_front", DEFAULT_TRUNK_FRONT),
         walk_stride=node.get_positive_or("walk_stride", DEFAULT_WALK_STRIDE),
         hip_yaw_range=hip_yaw,
+        hand_accel_limit=node.get_positive_or("hand_accel_limit", DEFAULT_HAND_ACCEL_LIMIT),
+        arm_moving_mass=node.get_positive_or("arm_moving_mass", DEFAULT_ARM_MOVING_MASS),
+        tuck_lift_duration=node.get_positive_or("tuck_lift_duration", DEFAULT_TUCK_LIFT_DURATION),
     )
 
 
