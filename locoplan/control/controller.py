@@ -366,8 +366,8 @@ class ControllerSettings:
     pelvis 18 -> 29 mm RMS from the plan while walking: the heavy swing leg lifted higher
     shakes the trunk more) and `raibert_gain` x sqrt(0.98 / 0.60) = 0.064 s (within 1 mm RMS
     and 0.01 deg of HECTOR's value on every script). So they stay, checked over that range
-    of sizes. (The torsion bound does scale, with the foot's length: `contact.torsion_
-    bound`.)"""
+    of sizes; the step that ends a walk uses the capture point's gain (`_foothold_from`).
+    (The torsion bound does scale, with the foot's length: `contact.torsion_bound`.)"""
 
     mpc_period: float = 0.01
     mapping: Literal["wbc", "jacobian"] = "wbc"
@@ -600,6 +600,11 @@ class LocoManipulationController:
         # Foot placement relative to the CoM (x: support centre under the CoM).
         self.foot_offset_from_com = self.foot_offsets - self.com_offset
         self.com_height = float(r.com_position[2])
+        # The last step's foothold velocity gain (s): the capture point's sqrt(z / g), z the
+        # CoM's height above the soles (HECTOR 0.23 s, H1 0.31 s; `_foothold_from`).
+        above_soles = float(self.com_offset[2] - np.mean(self.foot_offsets[:, 2]))
+        self._capture_gain = math.sqrt(above_soles / GRAVITY)
+        self._raibert_gain = self.s.raibert_gain
         # How far the nominal CoM stands ahead of the middle of the feet's support (m, along
         # the feet; robot.yaml's toe and heel about the sole site): see `_lean_share`.
         sole_x = float(np.mean(self.foot_offsets[:, 0]))
@@ -665,6 +670,13 @@ class LocoManipulationController:
         p_ref, v_ref, yaw_ref, _, _ = self._com_reference(np.array([t, t_td]))
         return self._foothold_from(k, t_td, p_c, v_c, p_ref, v_ref, float(yaw_ref[1]))
 
+    def _last_touchdown(self, t_td: float) -> bool:
+        """Whether the touchdown at t_td (s) ends its locomotion: no foot swings in the gait
+        period after it."""
+        period = self.plan.gait_period_at(t_td)
+        times = t_td + period * np.linspace(0.05, 1.0, 8)
+        return bool(np.all(self.plan.contact_flags(times)))
+
     def _foothold_from(
         self,
         k: int,
@@ -690,14 +702,26 @@ class LocoManipulationController:
         p = p_c + (p_ref[1] - p_ref[0]) + off
         p[:2] -= self._shift_now
         # The paper's rule: the measured CoM velocity's neutral point v_c dt/2, plus k times
-        # its error. Why measured (as the paper has it) and not the reference's velocity at
+        # its error (k = `raibert_gain`). The step that ends a walk or turn (`_last_
+        # touchdown`) takes k = sqrt(z_com / g) instead, the linear inverted pendulum's time
+        # constant: a foot placed v sqrt(z / g) ahead of the CoM is where the CoM's motion
+        # comes to rest over it (the capture point; the same term as in MIT Cheetah 3's convex
+        # MPC, Di Carlo et al. 2018; HECTOR 0.23 s, H1 0.31 s). With 0.05 there, H1, stopping
+        # from a loaded walk 0.2-0.3 m/s faster than its reference, put its last foot 1.5 cm
+        # ahead for it instead of 9 cm; the CoM ran on past its ankle-torque-bound centre of
+        # pressure at 0.16 m/s and the robot fell forward 1-1.5 s later while placing the box
+        # (envelope seed 40009, walk-carry-005, -014, -023: all four place their box with
+        # it). On every step, sqrt(z / g) fed the gait's sway back into the footholds: 4 of
+        # that seed's 40 H1 locomotion scripts fell (0.15 s: 1 of those 4).
+        # Why measured (as the paper has it) and not the reference's velocity at
         # touchdown, which this used before: a velocity error was then fed back through k =
         # 0.05 alone, and a line foot cannot push the CoM sideways in single support; the
         # first single support of an in-place turn with 0.23 s swings let the CoM fall 5 cm
         # towards the swing foot, every foot after landed the nominal width from the moving
         # CoM, and the robot walked off sideways at 0.15-0.2 m/s until it fell (envelope seed
         # 31415, locomotion-013, -038, -039, both strategies; all six succeed with it).
-        p[:2] += v_c[:2] * stance_time / 2.0 + self.s.raibert_gain * (v_c[:2] - v_ref[0, :2])
+        gain = self._capture_gain if self._last_touchdown(t_td) else self._raibert_gain
+        p[:2] += v_c[:2] * stance_time / 2.0 + gain * (v_c[:2] - v_ref[0, :2])
         p[2] = 0.0
         if self.plan.footprints:
             self._off_footprints(p, yaw_td)
