@@ -67,6 +67,9 @@ LOAD_RAMP_DOWN = 0.6  # s
 # (40 of 40 as before), 16180's throw-000 (fell without it) and the 276 manipulation scripts
 # of seeds 4711 and 5000 (drops: the same runs succeed with and without it).
 RELEASE_BLEND_TAU_RATIO = 4.0
+# The hand-path segments (`locoplan.plan.hands.HandSegment.label`) that take a hand to a grasp:
+# the hands track them at the approach gains (`ControllerSettings.hand_kp_acc`).
+APPROACH_LABELS = frozenset(("tuck", "lift", "reach", "slide"))
 # Margin (m) inside the feet's support region (the hull of the line feet, toe to heel) that a
 # standing CoM reference keeps: while both feet stand through the MPC's horizon, the plan's
 # CoM reference (before the held-load lean) is moved to the nearest point that far inside.
@@ -354,8 +357,9 @@ class ControllerSettings:
 
     The posture gains (1/s^2, 1/s) hold the joints no task determines
     (`posture_joint_indices`) at the nominal pose, as accelerations, so the same numbers
-    serve any robot's inertia: kp 100 is a 10 rad/s bandwidth, a quarter of the hands' (kp
-    1500), and kd = 2 sqrt(kp) damps it critically. HECTOR has no such joint and never uses them.
+    serve any robot's inertia: kp 100 is a 10 rad/s bandwidth, half the hands' (kp 400 but
+    on their way to a grasp), and kd = 2 sqrt(kp) damps it critically. HECTOR has no such
+    joint and never uses them.
 
     Where these were checked: set on HECTOR (17 kg, trunk 0.60 m above the soles, foot
     0.15 m); the same numbers stand, step, walk, side-step and turn H1 (51.4 kg, 0.98 m,
@@ -395,23 +399,27 @@ class ControllerSettings:
     swing_kd_rot: float = 80.0
     swing_height: float = 0.08
     raibert_gain: float = 0.05
-    # Free hands (not in contact with an object): as fast as the trunk's stiffest attitude
-    # axis (kp 1500, 38.7 rad/s), critically damped. Why: the WBC QP relaxes the floating
-    # base's accelerations, not the joints', so whatever the trunk's rotation misses of its
-    # command the hands inherit through the arm, times the lever from the trunk to the hand;
-    # a hand PD slower than the trunk's attitude loop lets that error outlast its cause. At
-    # kp 400 (20 rad/s) H1's hands were 3-5 cm inward of their reach while the trunk turned
-    # at 60 deg/s in steps (yaw bursts of 140 deg/s) and struck the parcel they were going
-    # round (envelope seed 42013, transfer-044 and -053: pushed 7 cm along the table, not
-    # grasped); at kp 1500 the same reaches are within 1-1.5 cm and both parcels are placed.
+    # Hands on their way to a grasp (the hand-path segments APPROACH_LABELS: tuck, lift,
+    # reach, slide): as fast as the trunk's stiffest attitude axis (kp 1500, 38.7 rad/s),
+    # critically damped. Why: the WBC QP relaxes the floating base's accelerations, not the
+    # joints', so whatever the trunk's rotation misses of its command the hands inherit
+    # through the arm, times the lever from the trunk to the hand; a hand PD slower than the
+    # trunk's attitude loop lets that error outlast its cause. At kp 400 (20 rad/s) H1's
+    # hands were 3-5 cm inward of their reach while the trunk turned at 60 deg/s in steps
+    # (yaw bursts of 140 deg/s) and struck the parcel they were going round (envelope seed
+    # 42013, transfer-044 and -053: pushed 7 cm along the table, not grasped); at kp 1500 the
+    # same reaches are within 1-1.5 cm and both parcels are placed.
     hand_kp_acc: float = 1500.0
     hand_kd_acc: float = 2.0 * math.sqrt(1500.0)
-    # Hands in contact with an object: kp 400 (20 rad/s), critically damped. A holding hand's
+    # Every other hand (pressing on an object, holding it, opening and retreating from it,
+    # resting at its default pose): kp 400 (20 rad/s), critically damped. A holding hand's
     # PD accelerates the object too (`_object_generalized_force` feeds m_o a forward), so its
-    # stiffness costs the object's mass times kp per metre of error: at kp 1500 a 10 kg block
-    # sagging 2 cm at the grip asked for 30 m/s^2 (300 N) through HECTOR's arms, the shoulder
-    # pitches saturated and the block went back on its table
-    # (tests/test_manipulation.py::test_holds_ten_kilograms_standing).
+    # stiffness costs the object's mass times kp per metre of error; a squeezing hand's error
+    # is its press; a hand opening beside what it set down may touch it or its support. At
+    # kp 1500 HECTOR's 10 and 14 kg blocks went back on their table after the grip
+    # (tests/test_manipulation.py), and an 8.95 kg block put back on its table: the retreating
+    # hands pushed on the table, the trunk rose 9 cm and the robot fell (envelope seed 16339,
+    # standing-hold-000).
     hand_kp_hold: float = 400.0
     hand_kd_hold: float = 40.0
     hand_kp_force: float = 300.0
@@ -535,9 +543,9 @@ class LocoManipulationController:
             s.swing_kp_rot,
             s.swing_kd_rot,
         ).packed()
-        # Per hand (left, right): the free or the holding gains (`_hand_gains`).
-        self._hand_kp = np.full((2, 1), s.hand_kp_acc)
-        self._hand_kd = np.full((2, 1), s.hand_kd_acc)
+        # Per hand (left, right): the approach or the other gains (`_hand_gains`).
+        self._hand_kp = np.full((2, 1), s.hand_kp_hold)
+        self._hand_kd = np.full((2, 1), s.hand_kd_hold)
         if s.mapping == "wbc":
             wbc_kernels.warm_up(robot.nv)
         self._nominal_geometry()
@@ -1490,16 +1498,14 @@ class LocoManipulationController:
 
     # -- pieces ---------------------------------------------------------------------------------
     def _hand_gains(self, t: float) -> None:
-        """Set each hand's PD gains for time t: the holding ones while it presses on an object
-        (its squeeze, `ControllerSettings.hand_kp_hold`) or holds it, the free ones otherwise.
-        A squeezing hand's target lies inside the object's side, so its PD error is the press
-        and its stiffness the squeeze force: squeezed at the free gains, HECTOR's 14 kg block
-        (scenarios/standing-load.yaml) was set back on its table within a second of its lift."""
+        """Set each hand's PD gains for time t: the approach gains (`ControllerSettings.
+        hand_kp_acc`) while the hand is on its way to a grasp (a segment in APPROACH_LABELS),
+        the holding ones otherwise (`hand_kp_hold`)."""
         tracks = self.plan.manipulation.tracks
         for k in range(2):
-            hold = self.plan.hand_contact(k, t) or tracks[k].label_at(t) == "squeeze"
-            self._hand_kp[k, 0] = self.s.hand_kp_hold if hold else self.s.hand_kp_acc
-            self._hand_kd[k, 0] = self.s.hand_kd_hold if hold else self.s.hand_kd_acc
+            approach = tracks[k].label_at(t) in APPROACH_LABELS
+            self._hand_kp[k, 0] = self.s.hand_kp_acc if approach else self.s.hand_kp_hold
+            self._hand_kd[k, 0] = self.s.hand_kd_acc if approach else self.s.hand_kd_hold
 
     def _object_generalized_force(
         self, t: float, mass: float, J_hands: FloatArray, hand_acc: FloatArray
