@@ -401,14 +401,14 @@ class ControllerSettings:
     raibert_gain: float = 0.05
     # Hands on their way to a grasp (the hand-path segments APPROACH_LABELS: tuck, lift,
     # reach, slide): as fast as the trunk's stiffest attitude axis (kp 1500, 38.7 rad/s),
-    # critically damped. Why: the WBC QP relaxes the floating base's accelerations, not the
-    # joints', so whatever the trunk's rotation misses of its command the hands inherit
-    # through the arm, times the lever from the trunk to the hand; a hand PD slower than the
-    # trunk's attitude loop lets that error outlast its cause. At kp 400 (20 rad/s) H1's
-    # hands were 3-5 cm inward of their reach while the trunk turned at 60 deg/s in steps
-    # (yaw bursts of 140 deg/s) and struck the parcel they were going round (envelope seed
-    # 42013, transfer-044 and -053: pushed 7 cm along the table, not grasped); at kp 1500 the
-    # same reaches are within 1-1.5 cm and both parcels are placed.
+    # critically damped, with the target's acceleration fed forward (`_hand_gains`). Why: the WBC QP
+    # relaxes the floating base's accelerations, not the joints', so whatever the trunk's rotation
+    # misses of its command the hands inherit through the arm, times the lever from the trunk to the
+    # hand; a hand PD slower than the trunk's attitude loop lets that error outlast its cause. At kp
+    # 400 (20 rad/s) H1's hands were 3-5 cm inward of their reach while the trunk turned at 60 deg/s
+    # in steps (yaw bursts of 140 deg/s) and struck the parcel they were going round (envelope seed
+    # 42013, transfer-044 and -053: pushed 7 cm along the table, not grasped); at kp 1500 the same
+    # reaches are within 1-1.5 cm and both parcels are placed.
     hand_kp_acc: float = 1500.0
     hand_kd_acc: float = 2.0 * math.sqrt(1500.0)
     # Every other hand (pressing on an object, holding it, opening and retreating from it,
@@ -546,6 +546,7 @@ class LocoManipulationController:
         # Per hand (left, right): the approach or the other gains (`_hand_gains`).
         self._hand_kp = np.full((2, 1), s.hand_kp_hold)
         self._hand_kd = np.full((2, 1), s.hand_kd_hold)
+        self._hand_ff = np.zeros((2, 1))
         if s.mapping == "wbc":
             wbc_kernels.warm_up(robot.nv)
         self._nominal_geometry()
@@ -1376,7 +1377,6 @@ class LocoManipulationController:
             # after it (envelope seed 4711, walk-carry-003).
             hand_targets, v_hand_des = hand_targets.copy(), v_hand_des.copy()
             for k in plan.holding_hands(t):
-                a_hand_des[k] = 0.0
                 if hand_targets[k, 2] < p_hands[k, 2]:
                     hand_targets[k, 2] = p_hands[k, 2]
                     v_hand_des[k, 2] = max(0.0, float(v_hand_des[k, 2]))
@@ -1390,7 +1390,7 @@ class LocoManipulationController:
             hand_targets = self._released_pair_targets(t, hand_targets)
         self._hand_gains(t)
         hand_acc = (
-            a_hand_des
+            self._hand_ff * a_hand_des
             + self._hand_kp * (hand_targets - p_hands)
             + self._hand_kd * (v_hand_des - v_hands)
         )
@@ -1498,14 +1498,20 @@ class LocoManipulationController:
 
     # -- pieces ---------------------------------------------------------------------------------
     def _hand_gains(self, t: float) -> None:
-        """Set each hand's PD gains for time t: the approach gains (`ControllerSettings.
-        hand_kp_acc`) while the hand is on its way to a grasp (a segment in APPROACH_LABELS),
-        the holding ones otherwise (`hand_kp_hold`)."""
+        """Set each hand's PD gains and feed-forward share for time t: on its way to a grasp
+        (a segment in APPROACH_LABELS) the approach gains (`ControllerSettings.hand_kp_acc`)
+        with the target's acceleration fed forward, otherwise the holding gains
+        (`hand_kp_hold`) and no feed-forward. A held object's planned acceleration fed
+        forward through the hands reaches the WBC as its inertia (`_object_generalized_
+        force`) at the plan's times instead of as the hands follow: a 7.57 kg box turned with
+        right after its pick then fell HECTOR at 2.7 s (envelope seed 16339, quasi-static
+        walk-carry-024; it stands without it)."""
         tracks = self.plan.manipulation.tracks
         for k in range(2):
             approach = tracks[k].label_at(t) in APPROACH_LABELS
             self._hand_kp[k, 0] = self.s.hand_kp_acc if approach else self.s.hand_kp_hold
             self._hand_kd[k, 0] = self.s.hand_kd_acc if approach else self.s.hand_kd_hold
+            self._hand_ff[k, 0] = 1.0 if approach else 0.0
 
     def _object_generalized_force(
         self, t: float, mass: float, J_hands: FloatArray, hand_acc: FloatArray
