@@ -210,7 +210,7 @@ def test_a_released_pair_eases_from_the_objects_width_to_the_planned_targets() -
     plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
     desc = load_robot_description("hector")
     ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
-    blend = RELEASE_BLEND_TAU_RATIO / np.sqrt(ctl.s.hand_kp_hold)
+    blend = RELEASE_BLEND_TAU_RATIO / np.sqrt(ctl.s.hand_kp_acc)
     assert ctl._pair_blend == pytest.approx(blend)
     planned = np.array([[0.30, 0.07, 0.10], [0.30, -0.07, 0.10]])
     offset = np.array([0.0, 0.04, 0.0])  # the object held the hands 4 cm further apart

@@ -76,7 +76,7 @@ def test_h1_pick_during_a_right_turn_holds_the_parcel_level(tmp_path: Path) -> N
     belt. Now it stays within 25 deg of level in the hands and rests upright on the conveyor.
     In the hold it leans 9-12 deg (its grip off its centre, the palm bond at its friction cap)
     and the loaded turns swing it to 19-21 deg: measured 19.x with the hands at kp 400 on their
-    way to the grasp, 20.5 at kp 1500 (`ControllerSettings.hand_kp_acc`; a palm bond of
+    way to the grasp, 20.5 at kp 1500 (robots/h1/robot.yaml `hand_approach_kp`; a palm bond of
     50 rad/s instead of 20 swung it to 28, the lean the same: the cap, not the spring, sets
     it). 25 deg keeps room over that and far below the 60-80 deg of a corner grasp."""
     loaded = load_scenario_file(Path(__file__).parent / "data" / "h1-pick-during-right-turn.yaml")

@@ -61,14 +61,14 @@ LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (g
 # only in the last moments before the release, and carrying it while the controller already
 # thinks it lighter made the hands sag and the robot fall forward after placing it.
 LOAD_RAMP_DOWN = 0.6  # s
-# Time constants of the holding hands' Cartesian PD (1/sqrt(kp), 50 ms at kp 400) over which a
+# Time constants of the hands' Cartesian PD (1/sqrt(kp), 50 ms at kp 400) over which a
 # two-hand release eases the pair's separation back to the plan's (`_released_pair_targets`):
 # 4 is the PD's settling time (2 %). Checked on the throws of envelope seeds 4711 and 27182
 # (40 of 40 as before), 16180's throw-000 (fell without it) and the 276 manipulation scripts
 # of seeds 4711 and 5000 (drops: the same runs succeed with and without it).
 RELEASE_BLEND_TAU_RATIO = 4.0
 # The hand-path segments (`locoplan.plan.hands.HandSegment.label`) that take a hand to a grasp:
-# the hands track them at the approach gains (`ControllerSettings.hand_kp_acc`).
+# the hands track them at the robot's approach gains (robot.yaml `hand_approach_kp`).
 APPROACH_LABELS = frozenset(("tuck", "lift", "reach", "slide"))
 # Margin (m) inside the feet's support region (the hull of the line feet, toe to heel) that a
 # standing CoM reference keeps: while both feet stand through the MPC's horizon, the plan's
@@ -357,8 +357,8 @@ class ControllerSettings:
 
     The posture gains (1/s^2, 1/s) hold the joints no task determines
     (`posture_joint_indices`) at the nominal pose, as accelerations, so the same numbers
-    serve any robot's inertia: kp 100 is a 10 rad/s bandwidth, half the hands' (kp 400 but
-    on their way to a grasp), and kd = 2 sqrt(kp) damps it critically. HECTOR has no such
+    serve any robot's inertia: kp 100 is a 10 rad/s bandwidth, half the hands' (kp 400), and
+    kd = 2 sqrt(kp) damps it critically. HECTOR has no such
     joint and never uses them.
 
     Where these were checked: set on HECTOR (17 kg, trunk 0.60 m above the soles, foot
@@ -399,29 +399,17 @@ class ControllerSettings:
     swing_kd_rot: float = 80.0
     swing_height: float = 0.08
     raibert_gain: float = 0.05
-    # Hands on their way to a grasp (the hand-path segments APPROACH_LABELS: tuck, lift,
-    # reach, slide): as fast as the trunk's stiffest attitude axis (kp 1500, 38.7 rad/s),
-    # critically damped, with the target's acceleration fed forward (`_hand_gains`). Why: the WBC QP
-    # relaxes the floating base's accelerations, not the joints', so whatever the trunk's rotation
-    # misses of its command the hands inherit through the arm, times the lever from the trunk to the
-    # hand; a hand PD slower than the trunk's attitude loop lets that error outlast its cause. At kp
-    # 400 (20 rad/s) H1's hands were 3-5 cm inward of their reach while the trunk turned at 60 deg/s
-    # in steps (yaw bursts of 140 deg/s) and struck the parcel they were going round (envelope seed
-    # 42013, transfer-044 and -053: pushed 7 cm along the table, not grasped); at kp 1500 the same
-    # reaches are within 1-1.5 cm and both parcels are placed.
-    hand_kp_acc: float = 1500.0
-    hand_kd_acc: float = 2.0 * math.sqrt(1500.0)
-    # Every other hand (pressing on an object, holding it, opening and retreating from it,
-    # resting at its default pose): kp 400 (20 rad/s), critically damped. A holding hand's
-    # PD accelerates the object too (`_object_generalized_force` feeds m_o a forward), so its
-    # stiffness costs the object's mass times kp per metre of error; a squeezing hand's error
-    # is its press; a hand opening beside what it set down may touch it or its support. At
-    # kp 1500 HECTOR's 10 and 14 kg blocks went back on their table after the grip
-    # (tests/test_manipulation.py), and an 8.95 kg block put back on its table: the retreating
-    # hands pushed on the table, the trunk rose 9 cm and the robot fell (envelope seed 16339,
-    # standing-hold-000).
-    hand_kp_hold: float = 400.0
-    hand_kd_hold: float = 40.0
+    # The hands' Cartesian PD (1/s^2, 1/s): 20 rad/s, critically damped. A robot.yaml
+    # `hand_approach_kp` (H1's) replaces it on the way to a grasp (`_hand_gains`); elsewhere
+    # it stays: a holding hand's PD accelerates the object too (`_object_generalized_force`
+    # feeds m_o a forward), so its stiffness costs the object's mass times kp per metre of
+    # error, a squeezing hand's error is its press, and a hand opening beside what it set
+    # down may touch it or its support. At kp 1500 HECTOR's 10 and 14 kg blocks went back on
+    # their table after the grip (tests/test_manipulation.py), and an 8.95 kg block was put
+    # back on its table with the retreating hands pushing on the table: the trunk rose 9 cm
+    # and the robot fell (envelope seed 16339, standing-hold-000).
+    hand_kp_acc: float = 400.0
+    hand_kd_acc: float = 40.0
     hand_kp_force: float = 300.0
     hand_kd_force: float = 20.0
     posture_kp_acc: float = 100.0
@@ -500,7 +488,7 @@ class LocoManipulationController:
         self._mass_shift = 0.0
         # Last two-hand hold: (time, offset (3,) m of the pair's separation from the plan's).
         self._pair_release: tuple[float, FloatArray] = (-math.inf, np.zeros(3))
-        self._pair_blend = RELEASE_BLEND_TAU_RATIO / math.sqrt(self.s.hand_kp_hold)
+        self._pair_blend = RELEASE_BLEND_TAU_RATIO / math.sqrt(self.s.hand_kp_acc)
         self._hold_mass = sum(h.mass for h in plan.holds)
         starts = {task.index: task.start for task in plan.tasks}
         self._drop_windows = [
@@ -544,9 +532,12 @@ class LocoManipulationController:
             s.swing_kd_rot,
         ).packed()
         # Per hand (left, right): the approach or the other gains (`_hand_gains`).
-        self._hand_kp = np.full((2, 1), s.hand_kp_hold)
-        self._hand_kd = np.full((2, 1), s.hand_kd_hold)
+        self._hand_kp = np.full((2, 1), s.hand_kp_acc)
+        self._hand_kd = np.full((2, 1), s.hand_kd_acc)
         self._hand_ff = np.zeros((2, 1))
+        # On the way to a grasp (`_hand_gains`): the robot's approach gains, if it states any.
+        kp_a = desc.hand_approach_kp
+        self._approach_gains = None if kp_a is None else (kp_a, 2.0 * math.sqrt(kp_a))
         if s.mapping == "wbc":
             wbc_kernels.warm_up(robot.nv)
         self._nominal_geometry()
@@ -1499,19 +1490,33 @@ class LocoManipulationController:
     # -- pieces ---------------------------------------------------------------------------------
     def _hand_gains(self, t: float) -> None:
         """Set each hand's PD gains and feed-forward share for time t: on its way to a grasp
-        (a segment in APPROACH_LABELS) the approach gains (`ControllerSettings.hand_kp_acc`)
-        with the target's acceleration fed forward, otherwise the holding gains
-        (`hand_kp_hold`) and no feed-forward. A held object's planned acceleration fed
-        forward through the hands reaches the WBC as its inertia (`_object_generalized_
-        force`) at the plan's times instead of as the hands follow: a 7.57 kg box turned with
-        right after its pick then fell HECTOR at 2.7 s (envelope seed 16339, quasi-static
-        walk-carry-024; it stands without it)."""
+        (a segment in APPROACH_LABELS), on a robot with approach gains (robot.yaml
+        `hand_approach_kp`: kp, critically damped), those with the target's acceleration fed
+        forward; otherwise `ControllerSettings.hand_kp_acc` / `hand_kd_acc` and no
+        feed-forward.
+
+        Why, on H1: the WBC QP relaxes the floating base's accelerations, not the joints', so
+        whatever the trunk's rotation misses of its command the hands inherit through the arm,
+        times the lever to the hand. At kp 400 H1's hands were 3-5 cm inward of their reach
+        while the trunk turned at 60 deg/s in steps (yaw bursts of 140 deg/s) and struck the
+        parcel they were going round (envelope seed 42013, transfer-044 and -053: pushed 7 cm
+        along the table, not grasped); at the trunk's attitude bandwidth (kp 1500) with the
+        feed-forward, within 1-1.5 cm, both placed. Why not on HECTOR: its arms are half as
+        long, and the same approach made 4 of seed 16339's 400 runs fall or miss that stood
+        without it (transfer-007 and walk-carry-024, both strategies). Why not while holding:
+        a held object's planned acceleration fed forward through the hands reaches the WBC
+        as its inertia (`_object_generalized_force`) at the plan's times instead of as the
+        hands follow; a 7.57 kg box turned with right after its pick then fell HECTOR at
+        2.7 s (seed 16339, quasi-static walk-carry-024)."""
         tracks = self.plan.manipulation.tracks
+        fast = self._approach_gains
         for k in range(2):
-            approach = tracks[k].label_at(t) in APPROACH_LABELS
-            self._hand_kp[k, 0] = self.s.hand_kp_acc if approach else self.s.hand_kp_hold
-            self._hand_kd[k, 0] = self.s.hand_kd_acc if approach else self.s.hand_kd_hold
-            self._hand_ff[k, 0] = 1.0 if approach else 0.0
+            kp, kd, ff = self.s.hand_kp_acc, self.s.hand_kd_acc, 0.0
+            if fast is not None and tracks[k].label_at(t) in APPROACH_LABELS:
+                kp, kd, ff = fast[0], fast[1], 1.0
+            self._hand_kp[k, 0] = kp
+            self._hand_kd[k, 0] = kd
+            self._hand_ff[k, 0] = ff
 
     def _object_generalized_force(
         self, t: float, mass: float, J_hands: FloatArray, hand_acc: FloatArray

@@ -142,6 +142,10 @@ class RobotDescription:
     reach: RobotReach | None = None
     planner: PlannerFigures = PlannerFigures()
     mpc_body: str = MPC_BODIES[0]  # one of MPC_BODIES
+    # The hands' Cartesian kp (1/s^2) on the way to a grasp, with the target's acceleration
+    # fed forward (robot.yaml `hand_approach_kp`; `LocoManipulationController._hand_gains`);
+    # None (HECTOR): the controller's hand gains throughout.
+    hand_approach_kp: float | None = None
 
     @property
     def n_joints(self) -> int:
@@ -272,6 +276,9 @@ def load_robot_description(name_or_path: str | Path = "hector") -> RobotDescript
         reach=reach,
         planner=planner if planner is not None else PlannerFigures(),
         mpc_body=reader.get_choice_or("mpc_body", MPC_BODIES),
+        hand_approach_kp=(
+            reader.get_positive("hand_approach_kp") if "hand_approach_kp" in reader.node else None
+        ),
     )
     if np.any(desc.q_joints_nominal < desc.q_lower) or np.any(desc.q_joints_nominal > desc.q_upper):
         raise nominal_deg.error("nominal joint angles must lie within the joint ranges")
