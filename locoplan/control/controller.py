@@ -1352,9 +1352,8 @@ class LocoManipulationController:
             swing_yaw[n_swing] = yaw_des
             n_swing += 1
         # Hand targets.
-        hand_targets, v_hand_des, a_hand_des = plan.hand_target_arrays(
-            t, q[:3], yaw, R.dot(v[:3]), float(omega_w[2])
-        )
+        v_base, yaw_rate = R.dot(v[:3]), float(omega_w[2])
+        hand_targets, v_hand_des = plan.hand_target_arrays(t, q[:3], yaw, v_base, yaw_rate)
         J_hands = np.ascontiguousarray(J_fr[2:4, :3])
         p_hands = p_fr[2:4]
         v_hands = v_fr[2:4, :3]
@@ -1379,12 +1378,17 @@ class LocoManipulationController:
             self._pair_release = (t, hand_targets[0] - hand_targets[1] - gap)
         elif math.isfinite(self._pair_release[0]):
             hand_targets = self._released_pair_targets(t, hand_targets)
-        self._hand_gains(t)
-        hand_acc = (
-            self._hand_ff * a_hand_des
-            + self._hand_kp * (hand_targets - p_hands)
-            + self._hand_kd * (v_hand_des - v_hands)
-        )
+        if self._hand_gains(t):
+            a_ff = plan.hand_target_accelerations(t, q[:3], yaw, v_base, yaw_rate)
+            hand_acc = (
+                self._hand_ff * a_ff
+                + self._hand_kp * (hand_targets - p_hands)
+                + self._hand_kd * (v_hand_des - v_hands)
+            )
+        else:
+            hand_acc = self._hand_kp * (hand_targets - p_hands) + self._hand_kd * (
+                v_hand_des - v_hands
+            )
         tau_ext = self._object_generalized_force(t, mass_now, J_hands, hand_acc)
 
         t_w = time.perf_counter()
@@ -1488,12 +1492,12 @@ class LocoManipulationController:
         )
 
     # -- pieces ---------------------------------------------------------------------------------
-    def _hand_gains(self, t: float) -> None:
+    def _hand_gains(self, t: float) -> bool:
         """Set each hand's PD gains and feed-forward share for time t: on its way to a grasp
         (a segment in APPROACH_LABELS), on a robot with approach gains (robot.yaml
         `hand_approach_kp`: kp, critically damped), those with the target's acceleration fed
         forward; otherwise `ControllerSettings.hand_kp_acc` / `hand_kd_acc` and no
-        feed-forward.
+        feed-forward. Returns whether some hand is fed forward now.
 
         Why, on H1: the WBC QP relaxes the floating base's accelerations, not the joints', so
         whatever the trunk's rotation misses of its command the hands inherit through the arm,
@@ -1508,15 +1512,20 @@ class LocoManipulationController:
         as its inertia (`_object_generalized_force`) at the plan's times instead of as the
         hands follow; a 7.57 kg box turned with right after its pick then fell HECTOR at
         2.7 s (seed 16339, quasi-static walk-carry-024)."""
-        tracks = self.plan.manipulation.tracks
         fast = self._approach_gains
+        if fast is None:
+            return False
+        tracks = self.plan.manipulation.tracks
+        any_fast = False
         for k in range(2):
             kp, kd, ff = self.s.hand_kp_acc, self.s.hand_kd_acc, 0.0
-            if fast is not None and tracks[k].label_at(t) in APPROACH_LABELS:
+            if tracks[k].label_at(t) in APPROACH_LABELS:
                 kp, kd, ff = fast[0], fast[1], 1.0
+                any_fast = True
             self._hand_kp[k, 0] = kp
             self._hand_kd[k, 0] = kd
             self._hand_ff[k, 0] = ff
+        return any_fast
 
     def _object_generalized_force(
         self, t: float, mass: float, J_hands: FloatArray, hand_acc: FloatArray

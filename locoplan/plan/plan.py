@@ -183,19 +183,27 @@ class Plan:
         base_yaw: float,
         base_velocity: npt.ArrayLike | None = None,
         base_yaw_rate: float | None = None,
-    ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """`hand_targets_at` as (positions (2, 3), velocities (2, 3), accelerations (2, 3)),
-        rows left, right: one array each, for a control loop. The accelerations take the trunk
-        at its present velocity and yaw rate (`HandTrack.acceleration`)."""
+    ) -> tuple[FloatArray, FloatArray]:
+        """`hand_targets_at` as (positions (2, 3), velocities (2, 3)), rows left, right: one
+        array each, for a control loop."""
+        b = self._base_pose(t, base_position, base_yaw, base_velocity, base_yaw_rate)
+        pl, vl = self.manipulation.tracks[0].evaluate(t, b)
+        pr, vr = self.manipulation.tracks[1].evaluate(t, b)
+        return np.array((pl, pr), dtype=float), np.array((vl, vr), dtype=float)
+
+    def hand_target_accelerations(
+        self,
+        t: float,
+        base_position: npt.ArrayLike,
+        base_yaw: float,
+        base_velocity: npt.ArrayLike,
+        base_yaw_rate: float,
+    ) -> FloatArray:
+        """The hand targets' accelerations (2, 3) (m/s^2, rows left, right) at t with the trunk
+        at this pose, moving at its present velocity and yaw rate (`HandTrack.acceleration`)."""
         b = self._base_pose(t, base_position, base_yaw, base_velocity, base_yaw_rate)
         tracks = self.manipulation.tracks
-        pl, vl = tracks[0].evaluate(t, b)
-        pr, vr = tracks[1].evaluate(t, b)
-        return (
-            np.array((pl, pr), dtype=float),
-            np.array((vl, vr), dtype=float),
-            np.array((tracks[0].acceleration(t, b), tracks[1].acceleration(t, b)), dtype=float),
-        )
+        return np.array((tracks[0].acceleration(t, b), tracks[1].acceleration(t, b)), dtype=float)
 
     def _base_pose(
         self,
