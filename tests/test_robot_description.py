@@ -246,6 +246,7 @@ def test_h1_loads_with_torso_and_four_joint_arms() -> None:
     assert (h1.reach.max, h1.reach.nominal) == (0.613, 0.458)
     # 1e-9 kg: a sum of decimal link masses (robots/h1/README.md).
     assert abs(h1.total_mass - 51.437) < 1e-9
+    assert h1.hand_approach_kp == 1500.0
     with pytest.raises(ValueError):
         h1.torso_joint_indices[0] = 3
 
@@ -258,6 +259,7 @@ def test_optional_fields_default_to_hector(desc: RobotDescription) -> None:
     assert desc.reach is None
     assert desc.mpc_body == "composite"
     assert desc.planner == PlannerFigures()
+    assert desc.hand_approach_kp is None
 
 
 def test_a_partial_planner_section_keeps_hector_s_other_figures(tmp_path: Path) -> None:
@@ -293,6 +295,10 @@ def _torso_twice(raw: dict) -> None:
         (_set(["planner", "throw_stop_offset"], -0.1), "'throw_stop_offset' must not be neg"),
         (_set(["planner", "hip_yaw_range_deg"], 0), "'hip_yaw_range_deg' must be positive"),
         (_set(["mpc_body"], "legs"), r"'mpc_body' must be one of \['composite', 'upper-body'\]"),
+        (_set(["hand_approach_kp"], -5), "'hand_approach_kp' must be positive"),
+        (_set(["planner", "hand_accel_limit"], 0), "'hand_accel_limit' must be positive"),
+        (_set(["planner", "arm_moving_mass"], "heavy"), "'arm_moving_mass' must be a finite"),
+        (_set(["planner", "tuck_lift_duration"], -1), "'tuck_lift_duration' must be positive"),
     ],
 )
 def test_bad_h1_files_raise(tmp_path: Path, edit, message: str) -> None:
