@@ -358,8 +358,7 @@ class ControllerSettings:
     The posture gains (1/s^2, 1/s) hold the joints no task determines
     (`posture_joint_indices`) at the nominal pose, as accelerations, so the same numbers
     serve any robot's inertia: kp 100 is a 10 rad/s bandwidth, half the hands' (kp 400), and
-    kd = 2 sqrt(kp) damps it critically. HECTOR has no such
-    joint and never uses them.
+    kd = 2 sqrt(kp) damps it critically. HECTOR has no such joint and never uses them.
 
     Where these were checked: set on HECTOR (17 kg, trunk 0.60 m above the soles, foot
     0.15 m); the same numbers stand, step, walk, side-step and turn H1 (51.4 kg, 0.98 m,
