@@ -79,5 +79,7 @@ def test_a_measured_velocity_error_moves_the_foothold_by_half_the_stance_plus_k(
     base, yaw0 = ctl._foothold(k, t_td - 0.05, t_td, p_c, np.zeros(3))
     moved, yaw1 = ctl._foothold(k, t_td - 0.05, t_td, p_c, np.array([0.0, 0.2, 0.0]))
     dt = plan.gait_period_at(t_td) / 2.0
-    assert moved - base == pytest.approx([0.0, (dt / 2.0 + ctl._raibert_gain) * 0.2, 0.0], abs=1e-9)
+    assert moved - base == pytest.approx(
+        [0.0, (dt / 2.0 + ctl.s.raibert_gain) * 0.2, 0.0], abs=1e-9
+    )
     assert yaw1 == yaw0

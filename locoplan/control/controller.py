@@ -604,7 +604,6 @@ class LocoManipulationController:
         above_soles = float(self.com_offset[2] - np.mean(self.foot_offsets[:, 2]))
         self._capture_gain = math.sqrt(above_soles / GRAVITY)
         self._last_touchdowns: dict[float, bool] = {}
-        self._raibert_gain = self.s.raibert_gain
         # How far the nominal CoM stands ahead of the middle of the feet's support (m, along
         # the feet; robot.yaml's toe and heel about the sole site): see `_lean_share`.
         sole_x = float(np.mean(self.foot_offsets[:, 0]))
@@ -726,7 +725,7 @@ class LocoManipulationController:
         # towards the swing foot, every foot after landed the nominal width from the moving
         # CoM, and the robot walked off sideways at 0.15-0.2 m/s until it fell (envelope seed
         # 31415, locomotion-013, -038, -039, both strategies; all six succeed with it).
-        gain = self._capture_gain if self._last_touchdown(t_td) else self._raibert_gain
+        gain = self._capture_gain if self._last_touchdown(t_td) else self.s.raibert_gain
         p[:2] += v_c[:2] * stance_time / 2.0 + gain * (v_c[:2] - v_ref[0, :2])
         p[2] = 0.0
         if self.plan.footprints:
@@ -1384,17 +1383,12 @@ class LocoManipulationController:
             self._pair_release = (t, hand_targets[0] - hand_targets[1] - gap)
         elif math.isfinite(self._pair_release[0]):
             hand_targets = self._released_pair_targets(t, hand_targets)
-        if self._hand_gains(t):
+        fed = self._hand_gains(t)
+        hand_acc = self._hand_kp * (hand_targets - p_hands)
+        if fed:
             a_ff = plan.hand_target_accelerations(t, q[:3], yaw, v_base, yaw_rate)
-            hand_acc = (
-                self._hand_ff * a_ff
-                + self._hand_kp * (hand_targets - p_hands)
-                + self._hand_kd * (v_hand_des - v_hands)
-            )
-        else:
-            hand_acc = self._hand_kp * (hand_targets - p_hands) + self._hand_kd * (
-                v_hand_des - v_hands
-            )
+            hand_acc = self._hand_ff * a_ff + hand_acc
+        hand_acc = hand_acc + self._hand_kd * (v_hand_des - v_hands)
         tau_ext = self._object_generalized_force(t, mass_now, J_hands, hand_acc)
 
         t_w = time.perf_counter()

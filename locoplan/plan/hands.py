@@ -109,15 +109,20 @@ class HandTrack:
     segments: tuple[HandSegment, ...]
     _t0_list: list[float]
 
-    def evaluate(self, t: float, b: BasePose) -> tuple[Vec3, Vec3]:
-        """World position (m) and velocity (m/s) of the hand target at time t."""
+    def _segment_at(self, t: float) -> tuple[HandSegment | None, HandWaypoint]:
+        """The segment under way at t (s) and its end, or None and the waypoint the hand
+        rests at (the initial one before the first segment, else the last segment's end)."""
         k = bisect.bisect_right(self._t0_list, t) - 1
         if k < 0:
-            p, v, _, _ = _to_world(self.initial, b)
-            return p, v
+            return None, self.initial
         g = self.segments[k]
-        if t >= g.t1:
-            p, v, _, _ = _to_world(g.end, b)
+        return (None if t >= g.t1 else g), g.end
+
+    def evaluate(self, t: float, b: BasePose) -> tuple[Vec3, Vec3]:
+        """World position (m) and velocity (m/s) of the hand target at time t."""
+        g, rest = self._segment_at(t)
+        if g is None:
+            p, v, _, _ = _to_world(rest, b)
             return p, v
         T = g.t1 - g.t0
         s, ds, g0, dg0, g1, dg1 = hermite((t - g.t0) / T)
@@ -158,12 +163,9 @@ class HandTrack:
         hands' feed-forward: a Cartesian PD without it lags a quintic reach by about its
         acceleration over kp; a reach of d in T peaks at 5.77 d / T^2, 28 m/s^2 for 0.3 m in
         0.25 s, 7 cm at kp 400)."""
-        k = bisect.bisect_right(self._t0_list, t) - 1
-        if k < 0:
-            return _turning(self.initial, b)[0]
-        g = self.segments[k]
-        if t >= g.t1:
-            return _turning(g.end, b)[0]
+        g, rest = self._segment_at(t)
+        if g is None:
+            return _turning(rest, b)[0]
         T = g.t1 - g.t0
         tau = (t - g.t0) / T
         s, ds, g0, dg0, g1, dg1 = hermite(tau)
@@ -190,10 +192,8 @@ class HandTrack:
 
     def label_at(self, t: float) -> str | None:
         """The label of the segment under way at t (s), None between and outside segments."""
-        k = bisect.bisect_right(self._t0_list, t) - 1
-        if k < 0 or t >= self.segments[k].t1:
-            return None
-        return self.segments[k].label
+        g, _ = self._segment_at(t)
+        return None if g is None else g.label
 
     def last_waypoint(self) -> HandWaypoint:
         """Where the hand rests after its last segment."""
