@@ -727,6 +727,16 @@ class LocoManipulationController:
         # 31415, locomotion-013, -038, -039, both strategies; all six succeed with it).
         gain = self._capture_gain if self._last_touchdown(t_td) else self.s.raibert_gain
         p[:2] += v_c[:2] * stance_time / 2.0 + gain * (v_c[:2] - v_ref[0, :2])
+        # The CoM's position error fed back as a velocity, closed over a gait period T:
+        # wanting v_ref + e / T, the foot lands raibert_gain e / T the other way (the CoM
+        # falls away from its foot). Why: the footholds above follow the measured CoM, and
+        # with swings of nearly half the period the feet stand together for milliseconds, so
+        # a line foot cannot push the CoM sideways and nothing brought it back to its
+        # reference: walking 0.94 m while turning 49 deg, HECTOR drifted 0.27 m to its side
+        # of the path, and the sideways walk that followed fell (envelope seed 27449,
+        # locomotion-005, both strategies).
+        error = p_ref[0, :2] + self._shift_now - p_c[:2]
+        p[:2] -= self.s.raibert_gain * error / (2.0 * stance_time)
         p[2] = 0.0
         if self.plan.footprints:
             self._off_footprints(p, yaw_td)

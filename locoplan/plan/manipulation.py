@@ -54,6 +54,7 @@ from locoplan.plan.hand_paths import (
     carry_in,
     clear_throw_line,
     default_waypoint,
+    feet_pull_accel,
     grip_height,
     heavy_pull,
     initial_waypoint,
@@ -218,6 +219,11 @@ class _Builder:
     swings: tuple[tuple[float, float], ...] = ()
     # The weakest leg joint's torque limit (N m).
     leg_torque: float = math.inf
+    # The robot's mass (kg) and the ratio of how far the centre of pressure may go ahead of
+    # the CoM to the CoM's height (`compiler._pull_lean`; inf: no bound): the pull-in's
+    # reaction the feet answer (`hand_paths.feet_pull_accel`).
+    robot_mass: float = 0.0
+    pull_lean: float = math.inf
     # When each hand's last retreat ends (s): it may outlast its drop.
     retreat_end: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     # The robot's figures (hand poses, hand radius, carry distance, trunk front).
@@ -372,6 +378,8 @@ class _Builder:
         t_contact = task.at_fraction(phases.contact)
         t_lift = task.at_fraction(phases.liftoff)
         t_raise = task.at_fraction(phases.raise_end)
+        if moving:
+            t_lift, t_raise = self._lift_on_both_feet(task, obj, (ox, oy, oz), t_lift, t_raise)
         rx, ry, ryaw, *_ = self.trunk.pose_at(t_contact)
         ax, ay = approach_direction(rx, ry, ox, oy, ryaw)
         lx, ly = -ay, ax
@@ -404,8 +412,9 @@ class _Builder:
                 if heavy and not self.steps_during(t_lift, t_raise):
                     rise = self._carry_height(task, obj, target, gz + phases.raise_height, lift)
                     rise -= gz + phases.raise_height - self.trunk.height
+                    feet = feet_pull_accel(obj.mass, self.robot_mass, self.pull_lean, geom)
                     raise_accel, accel = self._heavy_pull_accel(
-                        task, t_lift, t_raise, t_settle, pull, rise, accel
+                        task, t_lift, t_raise, t_settle, pull, rise, accel, feet
                     )
                 pull = min(pull, rest_to_rest_distance(t_raise - t_lift, raise_accel))
                 forward, x_in = max(target, ahead - pull), target
@@ -490,6 +499,30 @@ class _Builder:
             swept_top + carry_clearance(obj.mass) + half_extents(obj)[2] + lift - self.trunk.height,
         )
 
+    def _lift_on_both_feet(
+        self, task: PlannedTask, obj: ObjectSpec, p: Vec3, t_lift: float, t_raise: float
+    ) -> tuple[float, float]:
+        """Lift-off and raise end (s) of a pick of the object `obj` at `p` (world, m): for a
+        heavy one (`heavy_pull` at its distance ahead at the raise's end), both moved past
+        the last swing under way in the raise (the robot then stands on both feet when the
+        load comes on), the raise keeping its duration and ending by the pick's end at the
+        latest; otherwise unchanged.
+
+        Why: the phases are fractions of the pick's window, and a pick that starts in the
+        last half of a turn can lift while the robot still steps. A heavy object is pulled
+        in on both feet (`_heavy_pull_accel`) only when no foot swings in its raise: a
+        5.74 kg box 0.37 m ahead lifted 0.05 s before the turn's last touchdown was pulled
+        in gently instead, its 21 N m stayed ahead of the robot, the trunk went 17 cm
+        towards it with the MPC's vertical forces at their minimum, and the robot fell in
+        the turn back (envelope seed 27449, transfer-008; lifted at that touchdown, it is
+        placed)."""
+        ahead = world_to_trunk(self.trunk, t_raise, p)[0]
+        if not heavy_pull(obj.mass, ahead, self.leg_torque):
+            return t_lift, t_raise
+        last = max((b for a, b in self.swings if a < t_raise and b > t_lift), default=t_lift)
+        delay = min(max(last - t_lift, 0.0), max(task.end - t_raise, 0.0))
+        return t_lift + delay, t_raise + delay
+
     def _heavy_pull_accel(
         self,
         task: PlannedTask,
@@ -499,15 +532,17 @@ class _Builder:
         pull: float,
         rise: float,
         gentlest: float,
+        fastest: float = math.inf,
     ) -> tuple[float, float]:
         """Peak accelerations (m/s^2) of the raise and of the carry move of a heavy object
         (PULL_FAST_SHARE) that the robot lifts standing on both feet: the gentlest, down to
         `gentlest` (its `pull_accel`), with which the raise (pulling in as it goes up) and
         the carry move (the rest of the `pull`, m, and `rise`, m up to the carry height) are
         done before the first step after the lift-off (and before the hands' next task, at
-        `t_next` s, inf if none); if
-        none is, the whole pull during the raise, as fast as that takes, and the carry move
-        (up only) at `gentlest`.
+        `t_next` s, inf if none); if none is, the whole pull during the raise, as fast as
+        that takes, and the carry move (up only) at `gentlest`; never faster than `fastest`
+        (`feet_pull_accel`, what the feet answer): where the whole pull in the raise would
+        be, both at `fastest`, the pull ending after that step.
 
         Why: a heavy object still far ahead in the first single support saturates the stance
         hip pitch (constants' PULL_FAST_SHARE), so it must be in before the robot steps; but
@@ -518,6 +553,7 @@ class _Builder:
         24681, transfer-009, which then had 0.56 s standing before its next turn)."""
         t_raise_len = t_raise - t_lift
         fast = pull / rest_to_rest_distance(t_raise_len, 1.0) if t_raise_len > 0.0 else gentlest
+        gentlest = min(gentlest, fastest)
         if fast <= gentlest:
             return gentlest, gentlest
         t_step = min((a for a, b in self.swings if b > t_lift), default=math.inf)
@@ -529,9 +565,11 @@ class _Builder:
 
         if done(gentlest) <= t_by:
             return gentlest, gentlest
+        if fast > fastest and done(fastest) > t_by:
+            return fastest, fastest
         if done(fast) > t_by:
             return fast, gentlest
-        lo, hi = gentlest, fast
+        lo, hi = gentlest, min(fast, fastest)
         for _ in range(40):
             mid = 0.5 * (lo + hi)
             lo, hi = (lo, mid) if done(mid) <= t_by else (mid, hi)
@@ -920,10 +958,12 @@ def build_manipulation(
     swings: tuple[tuple[float, float], ...] = (),
     leg_torque: float = math.inf,
     geom: PlanGeometry = HECTOR_GEOMETRY,
+    pull_lean: tuple[float, float] = (0.0, math.inf),
 ) -> ManipulationPlan:
     """Hand tracks, contacts, object holds and targets for the sorted planned tasks;
     `swings`: the planned foot swings (lift-off, touchdown; s), both feet; `leg_torque`: the
-    weakest leg joint's torque limit (N m); `geom`: the robot's figures."""
+    weakest leg joint's torque limit (N m); `geom`: the robot's figures; `pull_lean`: the
+    robot's mass (kg) and its feet's pull-in lean (`compiler._pull_lean`; inf: no bound)."""
     shift = max((t.shift for t in tasks), default=0.0)
     b = _Builder(
         scenario,
@@ -933,6 +973,8 @@ def build_manipulation(
         swings=swings,
         leg_torque=leg_torque,
         geom=geom,
+        robot_mass=pull_lean[0],
+        pull_lean=pull_lean[1],
     )
     for task in tasks:
         if task.action == "pick":
