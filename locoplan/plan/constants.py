@@ -47,7 +47,8 @@ class PickPhases:
     reach_end .. contact: close in until the hand spheres touch the sides, decelerating to rest
     there (no impact). contact .. liftoff: press GRASP_SQUEEZE into the sides; the hand contact
     (sigma_H) starts at contact. liftoff: the object leaves its support (sigma_e starts).
-    liftoff .. raise_end: straight up by raise_height, world frame. raise_end .. 1: to the carry
+    liftoff .. raise_end: up by raise_height, world frame (straight up first, then in where the
+    object is pulled in: `manipulation._raise_segments`). raise_end .. 1: to the carry
     pose in the trunk frame, which is up (to CARRY_HEIGHT) rather than in (see
     locoplan.plan.manipulation.carry_forward).
     """
