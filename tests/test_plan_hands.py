@@ -140,7 +140,7 @@ def test_pick_targets_and_carry_pose() -> None:
     # depth 0.10 m), CARRY_HEIGHT above the trunk origin, taking as long as `pull_accel` asks
     # for the whole (3D) move: past the pick's end, well before the drop; no "pull" is left
     segments = plan.manipulation.tracks[0].segments
-    raise_ = [g for g in segments if g.label == "raise"][-1]  # up first, then this pulls in
+    raise_ = next(g for g in segments if g.label == "raise")
     carry = next(g for g in segments if g.label == "carry")
     assert not any(g.label == "pull" for g in segments)
     assert raise_.end.frame == "world" and raise_.end.point[0] == pytest.approx(grip.end.point[0])

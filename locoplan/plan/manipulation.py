@@ -54,7 +54,6 @@ from locoplan.plan.hand_paths import (
     carry_in,
     clear_throw_line,
     default_waypoint,
-    feet_pull_accel,
     grip_height,
     heavy_pull,
     initial_waypoint,
@@ -219,11 +218,6 @@ class _Builder:
     swings: tuple[tuple[float, float], ...] = ()
     # The weakest leg joint's torque limit (N m).
     leg_torque: float = math.inf
-    # The robot's mass (kg) and the ratio of how far the centre of pressure may go ahead of
-    # the CoM to the CoM's height (`compiler._pull_lean`; inf: no bound): the pull-in's
-    # reaction the feet answer (`hand_paths.feet_pull_accel`).
-    robot_mass: float = 0.0
-    pull_lean: float = math.inf
     # When each hand's last retreat ends (s): it may outlast its drop.
     retreat_end: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     # The robot's figures (hand poses, hand radius, carry distance, trunk front).
@@ -378,8 +372,6 @@ class _Builder:
         t_contact = task.at_fraction(phases.contact)
         t_lift = task.at_fraction(phases.liftoff)
         t_raise = task.at_fraction(phases.raise_end)
-        if moving:
-            t_lift, t_raise = self._lift_on_both_feet(task, obj, (ox, oy, oz), t_lift, t_raise)
         rx, ry, ryaw, *_ = self.trunk.pose_at(t_contact)
         ax, ay = approach_direction(rx, ry, ox, oy, ryaw)
         lx, ly = -ay, ax
@@ -398,11 +390,6 @@ class _Builder:
         # the robot stands on both feet during the raise (`_heavy_pull_accel`).
         pull = 0.0
         x_in = forward
-        # The raise goes straight up first, by raise_height as fast as the free arm moves,
-        # and pulls in only after that (`t_up`): see `_raise_segments`.
-        t_up = min(
-            t_lift + rest_to_rest_duration(phases.raise_height, geom.hand_accel_limit), t_raise
-        )
         # The next task that uses the hands (inf if none): the carry move, the heavy pull and
         # the settling-in end by then.
         t_settle = self.next_use(task)
@@ -417,11 +404,10 @@ class _Builder:
                 if heavy and not self.steps_during(t_lift, t_raise):
                     rise = self._carry_height(task, obj, target, gz + phases.raise_height, lift)
                     rise -= gz + phases.raise_height - self.trunk.height
-                    feet = feet_pull_accel(obj.mass, self.robot_mass, self.pull_lean, geom)
                     raise_accel, accel = self._heavy_pull_accel(
-                        task, t_up, t_raise, t_settle, pull, rise, accel, feet
+                        task, t_lift, t_raise, t_settle, pull, rise, accel
                     )
-                pull = min(pull, rest_to_rest_distance(t_raise - t_up, raise_accel))
+                pull = min(pull, rest_to_rest_distance(t_raise - t_lift, raise_accel))
                 forward, x_in = max(target, ahead - pull), target
         # Then, for an object held standing, while the hands have nothing else to do (until
         # t_settle), it comes in to CARRY_FORWARD slowly enough not to set it swinging.
@@ -461,8 +447,7 @@ class _Builder:
                 self.add(h, seg)
             self.add(h, HandSegment(t_reach, t_contact, w_pre, w_touch, i, "squeeze"))
             self.add(h, HandSegment(t_contact, t_lift, w_touch, w_grip, i, "grip"))
-            for seg in _raise_segments(t_lift, t_up, t_raise, w_grip, w_raised, i):
-                self.add(h, seg)
+            self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
             t_carry, x_to = self._carry_move(task, t_raise, raised, carry, x_in, accel, t_settle)
             carry = (x_to, carry[1], carry[2])
             w_carry = HandWaypoint(carry, "trunk")
@@ -505,30 +490,6 @@ class _Builder:
             swept_top + carry_clearance(obj.mass) + half_extents(obj)[2] + lift - self.trunk.height,
         )
 
-    def _lift_on_both_feet(
-        self, task: PlannedTask, obj: ObjectSpec, p: Vec3, t_lift: float, t_raise: float
-    ) -> tuple[float, float]:
-        """Lift-off and raise end (s) of a pick of the object `obj` at `p` (world, m): for a
-        heavy one (`heavy_pull` at its distance ahead at the raise's end), both moved past
-        the last swing under way in the raise (the robot then stands on both feet when the
-        load comes on), the raise keeping its duration and ending by the pick's end at the
-        latest; otherwise unchanged.
-
-        Why: the phases are fractions of the pick's window, and a pick that starts in the
-        last half of a turn can lift while the robot still steps. A heavy object is pulled
-        in on both feet (`_heavy_pull_accel`) only when no foot swings in its raise: a
-        5.74 kg box 0.37 m ahead lifted 0.05 s before the turn's last touchdown was pulled
-        in gently instead, its 21 N m stayed ahead of the robot, the trunk went 17 cm
-        towards it with the MPC's vertical forces at their minimum, and the robot fell in
-        the turn back (envelope seed 27449, transfer-008; lifted at that touchdown, it is
-        placed)."""
-        ahead = world_to_trunk(self.trunk, t_raise, p)[0]
-        if not heavy_pull(obj.mass, ahead, self.leg_torque):
-            return t_lift, t_raise
-        last = max((b for a, b in self.swings if a < t_raise and b > t_lift), default=t_lift)
-        delay = min(max(last - t_lift, 0.0), max(task.end - t_raise, 0.0))
-        return t_lift + delay, t_raise + delay
-
     def _heavy_pull_accel(
         self,
         task: PlannedTask,
@@ -538,17 +499,15 @@ class _Builder:
         pull: float,
         rise: float,
         gentlest: float,
-        fastest: float = math.inf,
     ) -> tuple[float, float]:
         """Peak accelerations (m/s^2) of the raise and of the carry move of a heavy object
         (PULL_FAST_SHARE) that the robot lifts standing on both feet: the gentlest, down to
         `gentlest` (its `pull_accel`), with which the raise (pulling in as it goes up) and
         the carry move (the rest of the `pull`, m, and `rise`, m up to the carry height) are
         done before the first step after the lift-off (and before the hands' next task, at
-        `t_next` s, inf if none); if none is, the whole pull during the raise, as fast as
-        that takes, and the carry move (up only) at `gentlest`; never faster than `fastest`
-        (`feet_pull_accel`, what the feet answer): where the whole pull in the raise would
-        be, both at `fastest`, the pull ending after that step.
+        `t_next` s, inf if none); if
+        none is, the whole pull during the raise, as fast as that takes, and the carry move
+        (up only) at `gentlest`.
 
         Why: a heavy object still far ahead in the first single support saturates the stance
         hip pitch (constants' PULL_FAST_SHARE), so it must be in before the robot steps; but
@@ -559,7 +518,6 @@ class _Builder:
         24681, transfer-009, which then had 0.56 s standing before its next turn)."""
         t_raise_len = t_raise - t_lift
         fast = pull / rest_to_rest_distance(t_raise_len, 1.0) if t_raise_len > 0.0 else gentlest
-        gentlest = min(gentlest, fastest)
         if fast <= gentlest:
             return gentlest, gentlest
         t_step = min((a for a, b in self.swings if b > t_lift), default=math.inf)
@@ -571,11 +529,9 @@ class _Builder:
 
         if done(gentlest) <= t_by:
             return gentlest, gentlest
-        if fast > fastest and done(fastest) > t_by:
-            return fastest, fastest
         if done(fast) > t_by:
             return fast, gentlest
-        lo, hi = gentlest, min(fast, fastest)
+        lo, hi = gentlest, fast
         for _ in range(40):
             mid = 0.5 * (lo + hi)
             lo, hi = (lo, mid) if done(mid) <= t_by else (mid, hi)
@@ -957,34 +913,6 @@ class _Builder:
         )
 
 
-def _raise_segments(
-    t_lift: float,
-    t_up: float,
-    t_raise: float,
-    grip: HandWaypoint,
-    raised: HandWaypoint,
-    task_index: int,
-) -> list[HandSegment]:
-    """A pick's raise from `grip` at t_lift to `raised` at t_raise (s; both world
-    waypoints): straight up to the raised height by t_up, then in (horizontally) to `raised`;
-    one straight move where it does not pull in or t_up is t_raise.
-
-    Why: the object comes off its support only once the hands carry its weight, a good part
-    of the raise (0.15 of 0.4 s for a 5.7 kg box); pulled in at once, up and in together, it
-    was dragged across its table in the meantime, and the table's friction pushed the robot
-    towards it: 2.0 N s more than the box's own momentum for HECTOR, which walked 9 cm
-    towards the table, sank 4 cm with the MPC's vertical forces at their minimum and fell in
-    the turn back (envelope seed 27449, transfer-012)."""
-    g, r = grip.point, raised.point
-    if t_up >= t_raise - 1e-9 or math.hypot(r[0] - g[0], r[1] - g[1]) < 1e-9:
-        return [HandSegment(t_lift, t_raise, grip, raised, task_index, "raise")]
-    up = HandWaypoint((g[0], g[1], r[2]), "world")
-    return [
-        HandSegment(t_lift, t_up, grip, up, task_index, "raise"),
-        HandSegment(t_up, t_raise, up, raised, task_index, "raise"),
-    ]
-
-
 def build_manipulation(
     tasks: tuple[PlannedTask, ...],
     scenario: Scenario,
@@ -992,12 +920,10 @@ def build_manipulation(
     swings: tuple[tuple[float, float], ...] = (),
     leg_torque: float = math.inf,
     geom: PlanGeometry = HECTOR_GEOMETRY,
-    pull_lean: tuple[float, float] = (0.0, math.inf),
 ) -> ManipulationPlan:
     """Hand tracks, contacts, object holds and targets for the sorted planned tasks;
     `swings`: the planned foot swings (lift-off, touchdown; s), both feet; `leg_torque`: the
-    weakest leg joint's torque limit (N m); `geom`: the robot's figures; `pull_lean`: the
-    robot's mass (kg) and its feet's pull-in lean (`compiler._pull_lean`; inf: no bound)."""
+    weakest leg joint's torque limit (N m); `geom`: the robot's figures."""
     shift = max((t.shift for t in tasks), default=0.0)
     b = _Builder(
         scenario,
@@ -1007,8 +933,6 @@ def build_manipulation(
         swings=swings,
         leg_torque=leg_torque,
         geom=geom,
-        robot_mass=pull_lean[0],
-        pull_lean=pull_lean[1],
     )
     for task in tasks:
         if task.action == "pick":
