@@ -83,3 +83,26 @@ def test_a_measured_velocity_error_moves_the_foothold_by_half_the_stance_plus_k(
         [0.0, (dt / 2.0 + ctl.s.raibert_gain) * 0.2, 0.0], abs=1e-9
     )
     assert yaw1 == yaw0
+
+
+def test_a_position_error_moves_the_foothold_the_other_way_by_k_e_over_the_period() -> None:
+    """The CoM's position error e (reference minus measured) is fed back as the velocity
+    e / T wanted on top of the reference's, T the gait period: the foothold moves by
+    -k e / T (k the Raibert gain; the CoM falls away from its foot, towards the reference),
+    to 1e-9 m, on top of following the measured CoM by the same displacement. A CoM 0.1 m
+    to the right of where the plan has it (without the error feedback nothing brought it
+    back: seed 27449, locomotion-005) lands the foot 0.1 m + k 0.1 / T to the right: further
+    from the reference, so that the CoM falls back towards it."""
+    plan = compile_plan(scenario_from_text(FAST_TURN))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    k, (t_td, _) = 0, plan.stance_intervals(0)[2]
+    t = t_td - 0.05
+    p_ref = ctl._com_reference(np.array([t]))[0][0]
+    base, yaw0 = ctl._foothold(k, t, t_td, p_ref, np.zeros(3))
+    off = np.array([0.0, -0.1, 0.0])
+    moved, yaw1 = ctl._foothold(k, t, t_td, p_ref + off, np.zeros(3))
+    period = plan.gait_period_at(t_td)
+    expected = off[1] - ctl.s.raibert_gain * 0.1 / period  # e = +0.1: the foot goes by -k e / T
+    assert moved - base == pytest.approx([0.0, expected, 0.0], abs=1e-9)
+    assert yaw1 == yaw0
