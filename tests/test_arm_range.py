@@ -1,6 +1,6 @@
 """The arms' working range (`locoplan.robot.arm_range`) and how the controller and the static
 analysis keep to it: H1's elbows stop short of the straight arm on their nominal side,
-HECTOR keeps its MJCF ranges; the controller's wall rows (`joint_wall_rows`) stop a joint
+HECTOR's short of their straight stop; the controller's wall rows (`joint_wall_rows`) stop a joint
 at its working bound; the static inverse kinematics reaches a point beyond the arm's reach
 with the elbow at that bound instead of stalling there. The closed-loop check is
 tests/test_h1_transfer.py::test_h1_pull_in_keeps_the_elbows_on_their_side."""
@@ -56,12 +56,24 @@ def test_h1_elbows_stop_short_of_the_straight_arm() -> None:
     np.testing.assert_array_equal(upper[others], np.asarray(desc.q_upper)[others])
 
 
-def test_hector_keeps_its_mjcf_ranges() -> None:
-    """HECTOR's elbow flexes 0..150 deg from the straight arm: no straight arm inside it."""
+def test_hector_elbows_stop_short_of_their_straight_stop() -> None:
+    """HECTOR's elbow flexes 0..150 deg from the straight arm: the straight arm is the stop at
+    0, and the working range starts STRAIGHT_MARGIN above it (the hand 0.5 mm nearer at
+    most); every other joint keeps its MJCF range."""
     robot = PinocchioRobot(load_robot_description("hector"))
+    desc = robot.desc
     lower, upper = working_range(robot)
-    np.testing.assert_array_equal(lower, robot.desc.q_lower)
-    np.testing.assert_array_equal(upper, robot.desc.q_upper)
+    elbows = [desc.joint_names.index(f"{side}_elbow") for side in "LR"]
+    for hand, j in enumerate(elbows):
+        assert straight_arm_angle(robot, hand, j) == pytest.approx(0.0, abs=1e-12)
+        assert desc.q_lower[j] == 0.0
+        assert lower[j] == pytest.approx(STRAIGHT_MARGIN, abs=1e-12)
+        assert upper[j] == desc.q_upper[j]
+        lost = _reach(robot, hand, j, 0.0) - _reach(robot, hand, j, STRAIGHT_MARGIN)
+        assert 0.0 < lost < 1e-3
+    others = [i for i in range(len(desc.joint_names)) if i not in elbows]
+    np.testing.assert_array_equal(lower[others], np.asarray(desc.q_lower)[others])
+    np.testing.assert_array_equal(upper, desc.q_upper)
 
 
 def test_wall_rows_stop_a_joint_at_its_bound() -> None:

@@ -15,6 +15,7 @@ import pytest
 from ruamel.yaml import YAML
 
 from locoplan.plan.statics import GRAVITY, HeldPose, StaticAnalysis, StaticModel, static_model
+from locoplan.robot.arm_range import STRAIGHT_MARGIN
 from locoplan.robot.description import RobotDescription, load_robot_description
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
@@ -185,12 +186,16 @@ def test_a_load_no_shift_brings_over_the_feet_is_unbalanced() -> None:
 
 
 def test_reach_and_unreachable_targets(model: StaticModel) -> None:
-    # robot.md: upper arm 0.205 + forearm 0.25 = 0.455 m from the shoulder.
-    assert model.max_reach == pytest.approx((0.455, 0.455), abs=1e-9)
+    # robot.md: upper arm 0.205 + forearm 0.25 = 0.455 m from the shoulder straight; the
+    # working range (`arm_range`) keeps the elbow STRAIGHT_MARGIN flexed: by the law of
+    # cosines 0.4544 m.
+    reach = math.sqrt(0.205**2 + 0.25**2 + 2 * 0.205 * 0.25 * math.cos(STRAIGHT_MARGIN))
+    assert 0.454 < reach < 0.455
+    assert model.max_reach == pytest.approx((reach, reach), abs=1e-9)
     a = model.analyse(ROBOT_MD_POSE, 0.0)
     shoulder = np.array([0.0, 0.12, 0.17])  # robot.md: trunk -> (0, +-0.12, 0.17)
     d = np.linalg.norm(np.array(ROBOT_MD_POSE.p_hands_trunk[0]) - shoulder)
-    assert a.reach_margin == pytest.approx(0.455 - d, abs=1e-9)
+    assert a.reach_margin == pytest.approx(reach - d, abs=1e-9)
     assert max(a.reach_residual) < 1e-6
     far = HeldPose(0.60, (0, 1), ((0.70, 0.12, 0.17), (0.70, -0.12, 0.17)))
     b = model.analyse(far, 0.0)

@@ -17,8 +17,18 @@ the distance from the arm's first joint to the hand by more than `FOLD_SHARE` of
 largest distance, with that largest distance strictly inside the range. The controller
 keeps the joint inside it (`locoplan.control.controller`), and the static analysis's
 inverse kinematics and reach use it (`locoplan.plan.statics_posture`), so that the plan
-asks for nothing the controller refuses. HECTOR's elbows (0..150 deg of flexion, straight
-at 0, the range's end) and every shoulder joint keep their MJCF ranges.
+asks for nothing the controller refuses. Every shoulder joint keeps its MJCF range.
+
+A straight arm at a stop of the range is walled the same way: HECTOR's elbows (0..150 deg
+of flexion, straight at 0) work from 0.1 rad. Why: a hand asked for a point beyond reach
+(a place the plan accepts short of reach, `payload.check_place_reach`) drove the elbow
+onto its stop at 0, where MuJoCo's limit force, which the WBC's model does not have, took
+the hand task's push; when the hands then moved back along the straight arms after the
+release (the one direction a straight arm cannot move its hand), the WBC relaxed the
+trunk's accelerations by up to 94 m/s^2 and 134 rad/s^2 and the robot rose 5 cm on its
+legs and fell sideways (HECTOR fresh envelope seed 44021, side-carry-013, place reach
+margin -0.021 m, both strategies; both succeed with the wall). The margin costs about
+0.5 mm of HECTOR's reach ((1 - cos 0.1) l1 l2 / d).
 """
 
 from __future__ import annotations
@@ -52,8 +62,8 @@ _GOLDEN_STEPS = 40
 def straight_arm_angle(robot: PinocchioRobot, hand: int, joint: int) -> float | None:
     """The angle (rad) of arm joint `joint` (index into the joints) of arm `hand` (0 left,
     1 right) at which the arm is straight (the largest shoulder-to-hand distance, the other
-    joints nominal), or None when the joint does not fold the arm or the largest distance is
-    at an end of its range."""
+    joints nominal; the range's end when it is largest there), or None when the joint does
+    not fold the arm."""
     model, desc = robot.model, robot.desc
     lo, hi = float(desc.q_lower[joint]), float(desc.q_upper[joint])
     q = robot.nominal_q()
@@ -69,8 +79,11 @@ def straight_arm_angle(robot: PinocchioRobot, hand: int, joint: int) -> float | 
     angles = np.linspace(lo, hi, _SAMPLES)
     d = np.array([dist(a) for a in angles])
     i = int(np.argmax(d))
-    if d.max() - d.min() <= FOLD_SHARE * d.max() or i in (0, _SAMPLES - 1):
+    if d.max() - d.min() <= FOLD_SHARE * d.max():
         return None
+    if i in (0, _SAMPLES - 1):
+        # Straight at a stop of the range (HECTOR's elbow, straight at 0).
+        return float(angles[i])
     a, b = float(angles[i - 1]), float(angles[i + 1])
     ratio = (math.sqrt(5.0) - 1.0) / 2.0
     for _ in range(_GOLDEN_STEPS):
@@ -84,8 +97,9 @@ def straight_arm_angle(robot: PinocchioRobot, hand: int, joint: int) -> float | 
 
 def working_range(robot: PinocchioRobot) -> tuple[FloatArray, FloatArray]:
     """Each joint's working range (lower, upper), rad, (n_joints,) each: the MJCF range, and
-    for an arm joint that folds the arm through a straight arm inside its range, the side of
-    the straight arm that holds the nominal angle, `STRAIGHT_MARGIN` short of it."""
+    for an arm joint that folds the arm through a straight arm inside its range or at one of
+    its stops, the side of the straight arm that holds the nominal angle, `STRAIGHT_MARGIN`
+    short of it."""
     desc = robot.desc
     lower = np.asarray(desc.q_lower, dtype=float).copy()
     upper = np.asarray(desc.q_upper, dtype=float).copy()
