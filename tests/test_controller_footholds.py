@@ -11,7 +11,9 @@ import pytest
 from plan_fixtures import scenario_from_text
 
 from locoplan.control.controller import (
+    GRAVITY,
     HIP_YAW_MARGIN,
+    POSITION_CONVERGENCE_TIME,
     LocoManipulationController,
     wrap_angle,
 )
@@ -26,6 +28,14 @@ gait: {period: 0.46, swing: 0.22}
 tasks:
   - {action: turn, angle: -178.6, start: 0.5, duration: 2.06}
 end: 3.5
+"""
+
+H1_STAND = """
+version: 1
+name: h1-stand
+robot: h1
+tasks:
+  - {action: stand, start: 0.0, duration: 1.0}
 """
 
 
@@ -87,12 +97,15 @@ def test_a_measured_velocity_error_moves_the_foothold_by_half_the_stance_plus_k(
 
 def test_a_position_error_moves_the_foothold_the_other_way_by_k_e_over_the_period() -> None:
     """The CoM's position error e (reference minus measured) is fed back as the velocity
-    e / T wanted on top of the reference's, T the gait period: the foothold moves by
-    -k e / T (k the Raibert gain; the CoM falls away from its foot, towards the reference),
-    to 1e-9 m, on top of following the measured CoM by the same displacement. A CoM 0.1 m
-    to the right of where the plan has it (without the error feedback nothing brought it
-    back: seed 27449, locomotion-005) lands the foot 0.1 m + k 0.1 / T to the right: further
-    from the reference, so that the CoM falls back towards it."""
+    e / T_C wanted on top of the reference's: the foothold moves by -k e / T, T the gait
+    period and k = 2 z / (g T_C) the linear inverted pendulum's gain for it (z the CoM's
+    height above the soles, T_C = POSITION_CONVERGENCE_TIME; the CoM falls away from its
+    foot, towards the reference), to 1e-9 m, on top of following the measured CoM by the
+    same displacement. A CoM 0.1 m to the right of where the plan has it (without the error
+    feedback nothing brought it back: seed 27449, locomotion-005) lands the foot 0.1 m +
+    k 0.1 / T to the right: further from the reference, so that the CoM falls back towards
+    it. k comes from the robot: HECTOR's is the 0.05 s measured on its envelopes (within
+    1 %), H1's (a CoM 0.95 m above its soles) 1.75 times that."""
     plan = compile_plan(scenario_from_text(FAST_TURN))
     desc = load_robot_description("hector")
     ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
@@ -103,6 +116,16 @@ def test_a_position_error_moves_the_foothold_the_other_way_by_k_e_over_the_perio
     off = np.array([0.0, -0.1, 0.0])
     moved, yaw1 = ctl._foothold(k, t, t_td, p_ref + off, np.zeros(3))
     period = plan.gait_period_at(t_td)
-    expected = off[1] - ctl.s.raibert_gain * 0.1 / period  # e = +0.1: the foot goes by -k e / T
+    expected = off[1] - ctl._position_gain * 0.1 / period  # e = +0.1: the foot goes by -k e / T
     assert moved - base == pytest.approx([0.0, expected, 0.0], abs=1e-9)
     assert yaw1 == yaw0
+    z = ctl._capture_gain**2 * GRAVITY
+    assert ctl._position_gain == pytest.approx(
+        2.0 * z / (GRAVITY * POSITION_CONVERGENCE_TIME), rel=1e-12
+    )
+    assert ctl._position_gain == pytest.approx(0.05, rel=0.01)
+    h1 = load_robot_description("h1")
+    h1_ctl = LocoManipulationController(
+        PinocchioRobot(h1), h1, compile_plan(scenario_from_text(H1_STAND))
+    )
+    assert h1_ctl._position_gain / ctl._position_gain == pytest.approx(1.75, abs=0.01)

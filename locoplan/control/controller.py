@@ -34,6 +34,13 @@ import numpy.typing as npt
 from locoplan.control import wbc_kernels
 from locoplan.control.contact import ContactLimits, ankle_row_binds, ankle_torque_row
 from locoplan.control.mpc import MpcInput, MpcSettings, MpcSolution, MultiContactMpc
+from locoplan.control.recovery import (
+    RecoverySchedule,
+    capture_point,
+    distance_outside,
+    plan_recovery_step,
+    support_hull,
+)
 from locoplan.control.support import clamp_into_support, convex_hull, foot_segments
 from locoplan.control.swing import min_jerk, swing_point
 from locoplan.control.tasks import TaskGains, rot_z, rotation_error
@@ -105,6 +112,23 @@ FOOT_FIXTURE_CLEARANCE = 0.03
 # 20 deg of HECTOR's 30 for the turn over a stance, which the envelope's transfers (up to
 # 65 deg/s) reach only briefly. Checked on envelope seeds 8080 and 9191 (README).
 HIP_YAW_MARGIN = math.radians(10.0)
+# s: the time over which the footholds close the CoM's position error (`_foothold_from`).
+# The foot lands d = 2 z / (g T_C) e / T the other way (z the CoM's height above the soles,
+# T the gait period): over a stance of T / 2 the linear inverted pendulum turns that offset
+# into a velocity change of e / T_C. 2.2 s reproduces on HECTOR (z / g = 0.0553 s^2) the
+# gain 0.05 s that was measured on its envelopes (0.0503 s; seeds 24681, 8080, 30103, 11235,
+# 27449, 33331) and gives H1 (0.0968 s^2) 0.088 s; checked on H1 envelope seeds 43019, 44027.
+POSITION_CONVERGENCE_TIME = 2.2
+# Recovery steps (`locoplan.control.recovery`): a standing robot whose capture point lies more
+# than RECOVERY_MARGIN (m) outside its feet's soles steps, lifting the foot RECOVERY_LEAD (s)
+# after the decision (the MPC, which sees the lift-off in its horizon from then on, moves the
+# weight onto the other foot first; 0.05 s is the MPC's period 0.01 s five times over and its
+# step 0.03 s well inside). The margin is the centre of pressure's own: the standing
+# reference stays STAND_SUPPORT_MARGIN inside the soles, so a capture point 1 cm outside them
+# is already 3 cm beyond where the MPC can bring the CoM to rest. Checked on HECTOR envelope
+# seed 44021 (README).
+RECOVERY_MARGIN = 0.01
+RECOVERY_LEAD = 0.05
 FEET = ("L", "R")
 # Task rows a limb's end carries: a line foot 5 (position, foot pitch and yaw; stance or
 # swing), a point hand 3 (position). A limb with more joints than that is redundant.
@@ -407,6 +431,8 @@ class ControllerSettings:
     # their table after the grip (tests/test_manipulation.py), and an 8.95 kg block was put
     # back on its table with the retreating hands pushing on the table: the trunk rose 9 cm
     # and the robot fell (envelope seed 16339, standing-hold-000).
+    # Whether the controller adds recovery steps (`locoplan.control.recovery`).
+    recovery_steps: bool = True
     hand_kp_acc: float = 400.0
     hand_kd_acc: float = 40.0
     hand_kp_force: float = 300.0
@@ -473,6 +499,8 @@ class LocoManipulationController:
         # Planned touchdown points by (foot, touchdown time), refreshed at every MPC update
         # (10 ms) and shared by the MPC's horizon and the swing trajectories.
         self._footholds: dict[tuple[int, float], tuple[FloatArray, float]] = {}
+        # Steps added to the plan's schedule (`_recover`).
+        self.recovery = RecoverySchedule()
         self._shift_now = np.zeros(2)
         self._stand_offset = np.zeros(2)
         self._object_cache: dict[int, FloatArray] = {}
@@ -603,6 +631,8 @@ class LocoManipulationController:
         # CoM's height above the soles (HECTOR 0.23 s, H1 0.31 s; `_foothold_from`).
         above_soles = float(self.com_offset[2] - np.mean(self.foot_offsets[:, 2]))
         self._capture_gain = math.sqrt(above_soles / GRAVITY)
+        # The footholds' gain on the CoM's position error (s; `POSITION_CONVERGENCE_TIME`).
+        self._position_gain = 2.0 * above_soles / (GRAVITY * POSITION_CONVERGENCE_TIME)
         self._last_touchdowns: dict[float, bool] = {}
         # How far the nominal CoM stands ahead of the middle of the feet's support (m, along
         # the feet; robot.yaml's toe and heel about the sole site): see `_lean_share`.
@@ -660,6 +690,58 @@ class LocoManipulationController:
         d = wrap_angle(float(self.plan.trunk.pose_at(t_lift)[2]) - yaw_td)
         o = min(max(abs(d) - self._hip_yaw_room, 0.0), 0.5 * abs(d))
         return yaw_td + math.copysign(o, d)
+
+    def _recover(
+        self,
+        t: float,
+        p_c: FloatArray,
+        v_c: FloatArray,
+        p_feet: FloatArray,
+        yaw_feet: FloatArray,
+        yaw_ref: float,
+    ) -> None:
+        """Add a recovery step (`locoplan.control.recovery`) for the CoM p_c (3,) moving at
+        v_c (3,) when the robot stands, the plan has both feet down for the step and a
+        swing's settling after it, the hands touch nothing (`hand_contact_flags`),
+        no recovery step is under way or settling, and the capture point lies more than
+        RECOVERY_MARGIN outside the soles."""
+        swing = self.plan.gait_swing
+        if self.recovery.busy(t, swing):
+            return
+        ahead = t + np.linspace(0.0, RECOVERY_LEAD + 2.0 * swing, 8)
+        if not bool(np.all(self.plan.contact_flags(ahead))):
+            return
+        if bool(np.any(self.plan.hand_contact_flags(np.array([t])))):
+            # Not while the hands hold or grip something. The capture point is a point mass's;
+            # a held load is a second mass the arms and the CoM shift move about (or its
+            # support still carries), which it does not describe: lifting 10-13 kg blocks,
+            # HECTOR's capture point (of robot and load together, or of the robot alone)
+            # left its soles by 2-6 cm while it stood through the lift, and the steps taken
+            # then set off a cascade of steps and a fall (seed 44021, standing-hold-006,
+            # -013).
+            return
+        xi = capture_point(p_c, v_c, self._capture_gain)
+        toe, heel = self.desc.foot_toe, self.desc.foot_heel
+        if distance_outside(xi, support_hull(p_feet, yaw_feet, toe, heel)) <= RECOVERY_MARGIN:
+            return
+        width = float(abs(self.foot_offsets[0, 1] - self.foot_offsets[1, 1]))
+        step = plan_recovery_step(
+            t,
+            xi,
+            p_feet,
+            yaw_feet,
+            yaw_ref,
+            toe,
+            heel,
+            width,
+            self.plan.geometry.walk_stride,
+            self._capture_gain,
+            RECOVERY_LEAD,
+            swing,
+        )
+        if self.plan.footprints:
+            self._off_footprints(step.target, step.yaw)
+        self.recovery.steps.append(step)
 
     def _foothold(
         self, k: int, t: float, t_td: float, p_c: FloatArray, v_c: FloatArray
@@ -739,7 +821,7 @@ class LocoManipulationController:
         # of 160 against 159. H1 seed 43019 (dynamic): 198 of 200 against 199 (its
         # locomotion-008 lost): the gain is HECTOR's, not yet checked per robot.
         error = p_ref[0, :2] + self._shift_now - p_c[:2]
-        p[:2] -= self.s.raibert_gain * error / (2.0 * stance_time)
+        p[:2] -= self._position_gain * error / (2.0 * stance_time)
         p[2] = 0.0
         if self.plan.footprints:
             self._off_footprints(p, yaw_td)
@@ -802,7 +884,9 @@ class LocoManipulationController:
         times = t + dt * np.arange(1, N + 1, dtype=np.float64)
         # Touchdowns inside the horizon: the stance a foot will be in at each step started
         # after t (NaN: the initial stance, compares False).
-        td = np.stack([plan.stance_starts(k, times) for k in range(2)])
+        td = np.stack(
+            [self.recovery.stance_starts(k, times, plan.stance_starts(k, times)) for k in range(2)]
+        )
         future = td > t + 1e-9
         keys = sorted({(k, x) for k in range(2) for x in td[k][future[k]].tolist()})
         # The held-load CoM shift now and at the horizon's steps (lead times t + LOAD_LEAD and
@@ -832,7 +916,7 @@ class LocoManipulationController:
         x_ref[:, 8] = w_ref
         x_ref[:, 9:12] = v_ref
         x_ref[:, 14] = -GRAVITY
-        contact = np.asarray(plan.contact_flags(times), dtype=bool)
+        contact = self.recovery.flags(times, np.asarray(plan.contact_flags(times), dtype=bool))
         if contact.all():
             # Standing through the horizon: the reference over the feet (STAND_SUPPORT_MARGIN).
             hull = convex_hull(
@@ -848,8 +932,13 @@ class LocoManipulationController:
         self._footholds.clear()
         for j, (k, t_td) in enumerate(keys):
             rows = [N, N + 1 + j]
-            fh = self._foothold_from(
-                k, t_td, p_c, v_c, p_all[rows], v_all[rows], float(yaw_all[N + 1 + j])
+            added = self.recovery.at_touchdown(k, t_td)
+            fh = (
+                (added.target, added.yaw)
+                if added is not None
+                else self._foothold_from(
+                    k, t_td, p_c, v_c, p_all[rows], v_all[rows], float(yaw_all[N + 1 + j])
+                )
             )
             self._footholds[(k, t_td)] = fh
             at = future[k] & (td[k] == t_td)
@@ -1302,9 +1391,15 @@ class LocoManipulationController:
         dyn_time = time.perf_counter() - t_dyn
 
         plan = self.plan
-        stance = (bool(plan.foot_stance(0, t)), bool(plan.foot_stance(1, t)))
         ref = plan.trunk_reference_at(t)
         self._update_load(t, hand_load)
+        mpc_due = t - self._last_mpc_t >= self.s.mpc_period - 1e-9
+        if mpc_due and self.s.recovery_steps:
+            self._recover(t, p_c, v_c, p_feet, yaw_feet, float(ref.yaw))
+        stance = (
+            bool(plan.foot_stance(0, t)) and self.recovery.swinging(0, t) is None,
+            bool(plan.foot_stance(1, t)) and self.recovery.swinging(1, t) is None,
+        )
         # The load now, for the MPC and the WBC's object feed-forward: with a measurement,
         # `_update_load` has it (carried_mass at t itself, without the arrays).
         mass_now = (
@@ -1323,7 +1418,7 @@ class LocoManipulationController:
         # MPC.
         mpc_sol: MpcSolution | None = None
         mpc_time = 0.0
-        if contact_changed or t - self._last_mpc_t >= self.s.mpc_period - 1e-9:
+        if contact_changed or mpc_due:
             yaw_ref_now = float(ref.yaw)
             yaw_meas = yaw_ref_now + wrap_angle(yaw - yaw_ref_now)
             x0 = np.concatenate([[roll, pitch, yaw_meas], p_c, omega_w, v_c, [0, 0, -GRAVITY]])
@@ -1351,16 +1446,22 @@ class LocoManipulationController:
         for k in range(2):
             if stance[k]:
                 continue
+            added = self.recovery.swinging(k, t)
             ph = plan.swing_phase(k, t)
-            if ph is None:
+            if added is not None:
+                liftoff, touchdown = added.liftoff, added.touchdown
+                p_td, yaw_td = added.target, added.yaw
+            elif ph is not None:
+                liftoff, touchdown = ph.liftoff, ph.touchdown
+                key = (k, ph.touchdown)
+                if key not in self._footholds:
+                    self._footholds[key] = self._foothold(k, t, ph.touchdown, p_c, v_c)
+                p_td, yaw_td = self._footholds[key]
+            else:
                 continue
             sw = self._swing[k]
-            key = (k, ph.touchdown)
-            if key not in self._footholds:
-                self._footholds[key] = self._foothold(k, t, ph.touchdown, p_c, v_c)
-            p_td, yaw_td = self._footholds[key]
-            duration = ph.touchdown - ph.liftoff
-            phase = min(1.0, max(0.0, (t - ph.liftoff) / duration))
+            duration = touchdown - liftoff
+            phase = min(1.0, max(0.0, (t - liftoff) / duration))
             pt = swing_point(sw.p_start, p_td, self.s.swing_height, phase, duration)
             sb, _, _ = min_jerk(phase)
             yaw_des = sw.yaw_start + sb * wrap_angle(yaw_td - sw.yaw_start)

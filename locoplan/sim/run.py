@@ -69,6 +69,8 @@ class RunOptions:
     qp_backend: str = "daqp"
     f_min: float | None = None
     pushes: tuple[Push, ...] = ()
+    # The controller's recovery steps (`locoplan.control.recovery`); off for comparisons.
+    recovery_steps: bool = True
     log_name: str | None = None
     video: Path | None = None
     live: LiveView | None = None
@@ -340,6 +342,7 @@ def controller_settings(
         qp_backend=options.qp_backend,
         mpc=mpc,
         limits=limits,
+        recovery_steps=options.recovery_steps,
     )
 
 
