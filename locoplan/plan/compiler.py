@@ -6,7 +6,6 @@ import math
 from collections.abc import Callable
 from dataclasses import replace
 
-from locoplan.plan import constants as k
 from locoplan.plan.clearance import fixture_obstacle
 from locoplan.plan.errors import InfeasiblePlanError, PlanError
 from locoplan.plan.events import PlanEvent, sort_events
@@ -123,8 +122,7 @@ def _assemble(
     # Only a plan that holds something needs the robot's statics (the payload check loads
     # the same cached model): about 1 s in a fresh process, which locomotion need not pay.
     leg_torque = _leg_torque(scenario.robot) if scenario.objects else math.inf
-    lean = _pull_lean(scenario.robot) if scenario.objects else (0.0, math.inf)
-    manipulation = build_manipulation(tasks, scenario, trunk, swings, leg_torque, geometry, lean)
+    manipulation = build_manipulation(tasks, scenario, trunk, swings, leg_torque, geometry)
 
     # Drops and throws are done by the hands that picked the object.
     hand_words = {("L", "R"): "both", ("L",): "left", ("R",): "right"}
@@ -317,7 +315,6 @@ def _wait_for_heavy_lifts(
     period = scenario.gait.period
     by_index = {t.index: t for t in tasks}
     notes: list[str] = []
-    pull_ends = dict(plan.manipulation.heavy_pull_ends)
     for hold in plan.holds:
         pick = by_index[hold.pick_task]
         raise_ = next(
@@ -334,16 +331,17 @@ def _wait_for_heavy_lifts(
         ahead = world_to_trunk(plan.trunk, raise_.t1, raise_.start.point)[0]
         if not heavy_pull(hold.mass, ahead, leg):
             continue
-        # Until the pick's end, or until its pull-in at what the feet answer ends if that
-        # is later (`ManipulationPlan.heavy_pull_ends`).
-        until = max(pick.end, pull_ends.get(pick.index, -math.inf))
         loco = next(
-            (t for t in tasks if t.kind == "locomotion" and pick.start <= t.start < until - 1e-9),
+            (
+                t
+                for t in tasks
+                if t.kind == "locomotion" and pick.start <= t.start < pick.end - 1e-9
+            ),
             None,
         )
-        if loco is None or not any(a < until and b > raise_.t0 for a, b in swings):
+        if loco is None or not any(a < pick.end and b > raise_.t0 for a, b in swings):
             continue
-        start = ceil_time(until)
+        start = ceil_time(pick.end)
         duration = loco.end - start
         if duration <= 0.0:
             continue
@@ -361,33 +359,11 @@ def _wait_for_heavy_lifts(
         notes.append(
             f"the {loco.action} written from {loco.start:.2f} s starts at {start:.2f} s (ends "
             f"at {loco.end:.2f} s as written) so that the robot stands on both feet until the "
-            f"pick of '{hold.object}' ({hold.mass:g} kg, {ahead:.2f} m ahead) "
-            + ("ends" if until <= pick.end else f"has pulled it in ({until:.2f} s)")
+            f"pick of '{hold.object}' ({hold.mass:g} kg, {ahead:.2f} m ahead) ends"
         )
     if not notes:
         return tasks, ()
     return tuple(by_index[t.index] for t in tasks), tuple(notes)
-
-
-def _pull_lean(robot: str) -> tuple[float, float]:
-    """The robot's mass (kg) and how far (m) the centre of pressure may go ahead of the
-    middle of the feet's support, half the support's length less PULL_COP_MARGIN, over the
-    CoM's height above the soles at the nominal pose (`hand_paths.feet_pull_accel`; HECTOR
-    17 kg and (0.075 - 0.02) / 0.54 m, H1 51.4 kg and (0.0875 - 0.02) / 0.95 m); (0, inf)
-    when the description cannot be read.
-
-    The middle of the support, not the CoM: the controller shifts the combined CoM of robot
-    and load over the middle while it holds (`LocoManipulationController._com_shift`)."""
-    from locoplan.exceptions import RobotDescriptionError
-    from locoplan.plan.statics import static_model
-
-    try:
-        model = static_model(robot)
-    except RobotDescriptionError:
-        return 0.0, math.inf
-    back, front = model.support_x
-    room = 0.5 * (front - back) - k.PULL_COP_MARGIN
-    return float(model.mass), max(room, 0.0) / model.postures.com_height
 
 
 def _leg_torque(robot: str) -> float:

@@ -253,11 +253,6 @@ ARM_MOVING_MASS: Final = 1.0
 # robot stood 0.5 s longer, 5-7 kg boxes drew the trunk 10 cm forward (seed 24681: the gentlest
 # pull that ends by the first step took 12 -> 7 of its 180 transfer and walk-carry failures).
 PULL_FAST_SHARE: Final = 0.5
-# How far (m) inside the feet's toe line the centre of pressure stays while the feet answer a
-# pull-in's reaction (`compiler._pull_lean`, `hand_paths.feet_pull_accel`): the controller's
-# standing support margin (STAND_SUPPORT_MARGIN), the same 2 cm on every robot. Checked on the
-# heavy pull-ins of envelope seeds 27449, ... (see the CHANGELOG).
-PULL_COP_MARGIN: Final = 0.02
 # Time (s) to raise a tucked hand to the height of its reach target before reaching out.
 TUCK_LIFT_DURATION: Final = 0.3
 # Time to move a hand into the tucked pose (s), and how long before the first predicted

@@ -168,26 +168,6 @@ def pull_accel(mass: float, geo: PlanGeometry = HECTOR_GEOMETRY) -> float:
     return geo.hand_accel_limit * m_arm / (m_arm + max(mass, 0.0))
 
 
-def feet_pull_accel(
-    mass: float, robot_mass: float, lean: float, geo: PlanGeometry = HECTOR_GEOMETRY
-) -> float:
-    """Peak acceleration (m/s^2) of a held object of `mass` (kg) pulled in towards the trunk
-    whose reaction the feet can answer: the arms and the object push the trunk with
-    (arm_moving_mass + mass) a, and the ground holds a horizontal force F on the robot and
-    its load, (robot_mass + mass) g in weight, only while F h <= (robot_mass + mass) g d, the
-    centre of pressure d ahead of the CoM at height h: a <= (robot_mass + mass) g `lean` /
-    (arm_moving_mass + mass), `lean` = d / h (`compiler._pull_lean`; inf: no bound).
-
-    Why: pulled in at 7.2 m/s^2 (51 N for a 7.08 kg box and HECTOR's arms, about twice the
-    24 N its feet answer), the trunk lurched 17 cm after the box, the MPC's vertical forces
-    fell to their minimum while it braked and the robot fell in the walk that followed
-    (envelope seed 27449, walk-carry-025, both strategies)."""
-    if not math.isfinite(lean):
-        return math.inf
-    load = max(mass, 0.0)
-    return (robot_mass + load) * GRAVITY * lean / (geo.arm_moving_mass + load)
-
-
 def heavy_pull(mass: float, ahead: float, leg_torque: float) -> bool:
     """Whether an object of `mass` (kg) picked `ahead` (m ahead of the trunk) is heavy for
     its pull-in: its weight times that distance exceeds PULL_FAST_SHARE of the weakest leg

@@ -54,7 +54,6 @@ from locoplan.plan.hand_paths import (
     carry_in,
     clear_throw_line,
     default_waypoint,
-    feet_pull_accel,
     grip_height,
     heavy_pull,
     initial_waypoint,
@@ -160,10 +159,6 @@ class ManipulationPlan:
     held_intervals: Intervals
     targets: dict[str, ObjectTarget]
     events: tuple[PlanEvent, ...]
-    # Per heavy pick (task index): when its pull-in would end at what the feet answer
-    # (`_Builder._heavy_pull_accel`, `hand_paths.feet_pull_accel`); the compiler starts the
-    # locomotion after it by then where the rate limits allow (`compiler._wait_for_heavy_lifts`).
-    heavy_pull_ends: tuple[tuple[int, float], ...] = ()
 
 
 @dataclass
@@ -223,13 +218,6 @@ class _Builder:
     swings: tuple[tuple[float, float], ...] = ()
     # The weakest leg joint's torque limit (N m).
     leg_torque: float = math.inf
-    # The robot's mass (kg) and the ratio of how far the centre of pressure may go ahead of
-    # the middle of the support to the CoM's height (`compiler._pull_lean`; inf: no bound):
-    # the pull-in's reaction the feet answer (`hand_paths.feet_pull_accel`).
-    robot_mass: float = 0.0
-    pull_lean: float = math.inf
-    # See `ManipulationPlan.heavy_pull_ends`.
-    heavy_pull_ends: dict[int, float] = field(default_factory=dict)
     # When each hand's last retreat ends (s): it may outlast its drop.
     retreat_end: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     # The robot's figures (hand poses, hand radius, carry distance, trunk front).
@@ -416,9 +404,8 @@ class _Builder:
                 if heavy and not self.steps_during(t_lift, t_raise):
                     rise = self._carry_height(task, obj, target, gz + phases.raise_height, lift)
                     rise -= gz + phases.raise_height - self.trunk.height
-                    feet = feet_pull_accel(obj.mass, self.robot_mass, self.pull_lean, geom)
                     raise_accel, accel = self._heavy_pull_accel(
-                        task, t_lift, t_raise, t_settle, pull, rise, accel, feet
+                        task, t_lift, t_raise, t_settle, pull, rise, accel
                     )
                 pull = min(pull, rest_to_rest_distance(t_raise - t_lift, raise_accel))
                 forward, x_in = max(target, ahead - pull), target
@@ -512,19 +499,15 @@ class _Builder:
         pull: float,
         rise: float,
         gentlest: float,
-        fastest: float = math.inf,
     ) -> tuple[float, float]:
         """Peak accelerations (m/s^2) of the raise and of the carry move of a heavy object
         (PULL_FAST_SHARE) that the robot lifts standing on both feet: the gentlest, down to
         `gentlest` (its `pull_accel`), with which the raise (pulling in as it goes up) and
         the carry move (the rest of the `pull`, m, and `rise`, m up to the carry height) are
         done before the first step after the lift-off (and before the hands' next task, at
-        `t_next` s, inf if none), no faster than `fastest` (`feet_pull_accel`: what the
-        feet answer) where one is; if none is, the whole pull during the raise, as fast as
-        that takes, and the carry move (up only) at `gentlest`. When that happens, the
-        time the pull would end at `fastest` goes to `heavy_pull_ends`: the compiler then
-        starts the locomotion after the pick by that time where its rate limits allow
-        (`compiler._wait_for_heavy_lifts`), and the plan built again finds the bounded pull.
+        `t_next` s, inf if none); if
+        none is, the whole pull during the raise, as fast as that takes, and the carry move
+        (up only) at `gentlest`.
 
         Why: a heavy object still far ahead in the first single support saturates the stance
         hip pitch (constants' PULL_FAST_SHARE), so it must be in before the robot steps; but
@@ -535,7 +518,6 @@ class _Builder:
         24681, transfer-009, which then had 0.56 s standing before its next turn)."""
         t_raise_len = t_raise - t_lift
         fast = pull / rest_to_rest_distance(t_raise_len, 1.0) if t_raise_len > 0.0 else gentlest
-        gentlest = min(gentlest, fastest)
         if fast <= gentlest:
             return gentlest, gentlest
         t_step = min((a for a, b in self.swings if b > t_lift), default=math.inf)
@@ -547,12 +529,9 @@ class _Builder:
 
         if done(gentlest) <= t_by:
             return gentlest, gentlest
-        bound = min(fast, fastest)
-        if done(bound) > t_by:
-            if math.isfinite(fastest):
-                self.heavy_pull_ends[task.index] = done(bound)
+        if done(fast) > t_by:
             return fast, gentlest
-        lo, hi = gentlest, bound
+        lo, hi = gentlest, fast
         for _ in range(40):
             mid = 0.5 * (lo + hi)
             lo, hi = (lo, mid) if done(mid) <= t_by else (mid, hi)
@@ -928,7 +907,6 @@ class _Builder:
                 merge_intervals(self.active[1] + [(c.t0, c.t1) for c in contacts[1]]),
             ),
             holds=holds,
-            heavy_pull_ends=tuple(sorted(self.heavy_pull_ends.items())),
             held_intervals=merge_intervals([(x.lift, x.release) for x in holds]),
             targets=dict(sorted(self.targets.items())),
             events=tuple(self.events),
@@ -942,12 +920,10 @@ def build_manipulation(
     swings: tuple[tuple[float, float], ...] = (),
     leg_torque: float = math.inf,
     geom: PlanGeometry = HECTOR_GEOMETRY,
-    pull_lean: tuple[float, float] = (0.0, math.inf),
 ) -> ManipulationPlan:
     """Hand tracks, contacts, object holds and targets for the sorted planned tasks;
     `swings`: the planned foot swings (lift-off, touchdown; s), both feet; `leg_torque`: the
-    weakest leg joint's torque limit (N m); `geom`: the robot's figures; `pull_lean`: the
-    robot's mass (kg) and its feet's pull-in lean (`compiler._pull_lean`; inf: no bound)."""
+    weakest leg joint's torque limit (N m); `geom`: the robot's figures."""
     shift = max((t.shift for t in tasks), default=0.0)
     b = _Builder(
         scenario,
@@ -957,8 +933,6 @@ def build_manipulation(
         swings=swings,
         leg_torque=leg_torque,
         geom=geom,
-        robot_mass=pull_lean[0],
-        pull_lean=pull_lean[1],
     )
     for task in tasks:
         if task.action == "pick":

@@ -110,9 +110,6 @@ class StancePostures:
         model, data = self.model, self.data
         pin.framesForwardKinematics(model, data, self.q_nominal)
         self._R_feet = [np.array(data.oMf[f].rotation) for f in self._foot_ids]
-        # The CoM's height above the soles at the nominal pose (m).
-        sole_z = float(np.mean([data.oMf[f].translation[2] for f in self._foot_ids]))
-        self.com_height = float(pin.centerOfMass(model, data, self.q_nominal)[2]) - sole_z
         self._p_feet = [np.array(data.oMf[f].translation) * (1.0, 1.0, 0.0) for f in self._foot_ids]
         # Toe and heel of each foot relative to its sole frame, world axes.
         self.r_points = [
