@@ -422,6 +422,8 @@ class ControllerSettings:
     swing_kd_rot: float = 80.0
     swing_height: float = 0.08
     raibert_gain: float = 0.05
+    # Whether the controller adds recovery steps (`locoplan.control.recovery`).
+    recovery_steps: bool = True
     # The hands' Cartesian PD (1/s^2, 1/s): 20 rad/s, critically damped. A robot.yaml
     # `hand_approach_kp` (H1's) replaces it on the way to a grasp (`_hand_gains`); elsewhere
     # it stays: a holding hand's PD accelerates the object too (`_object_generalized_force`
@@ -431,8 +433,6 @@ class ControllerSettings:
     # their table after the grip (tests/test_manipulation.py), and an 8.95 kg block was put
     # back on its table with the retreating hands pushing on the table: the trunk rose 9 cm
     # and the robot fell (envelope seed 16339, standing-hold-000).
-    # Whether the controller adds recovery steps (`locoplan.control.recovery`).
-    recovery_steps: bool = True
     hand_kp_acc: float = 400.0
     hand_kd_acc: float = 40.0
     hand_kp_force: float = 300.0
@@ -818,8 +818,9 @@ class LocoManipulationController:
         # of the path, and the sideways walk that followed fell (envelope seed 27449,
         # locomotion-005, both strategies). Measured: HECTOR fresh seed 33331 396 of 400
         # with it, 393 without; dynamic locomotion of seeds 24681, 8080, 30103, 11235 160
-        # of 160 against 159. H1 seed 43019 (dynamic): 198 of 200 against 199 (its
-        # locomotion-008 lost): the gain is HECTOR's, not yet checked per robot.
+        # of 160 against 159. The gain is the robot's (`POSITION_CONVERGENCE_TIME`): with
+        # HECTOR's 0.05 s, H1 seed 43019 (dynamic) lost locomotion-008 (198 of 200 against
+        # 199 without the feedback); with its own 0.088 s, 199 of 200.
         error = p_ref[0, :2] + self._shift_now - p_c[:2]
         p[:2] -= self._position_gain * error / (2.0 * stance_time)
         p[2] = 0.0
