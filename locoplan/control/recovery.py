@@ -117,7 +117,7 @@ def plan_recovery_step(
     dx = float(np.dot(rel, fwd)) - 0.5 * (toe - heel)
     dy = side * float(np.dot(rel, left))
     dx = float(np.clip(dx, -reach, reach))
-    dy = float(np.clip(max(dy, width), width, width + reach))
+    dy = float(np.clip(dy, width, width + reach))
     target = np.zeros(3)
     target[:2] = p_feet[other, :2] + dx * fwd + side * dy * left
     return RecoveryStep(foot, t + lead, t + lead + swing, target, float(yaw_feet[foot]))
