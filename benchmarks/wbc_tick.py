@@ -55,9 +55,10 @@ def record(scenario_path: str, seconds: float, every: int) -> dict[str, np.ndarr
     orig_solve = WholeBodyQp.solve_arrays
 
     def rec_stack(gains: np.ndarray, *args: Any) -> Any:
-        (q, v, R, omega, p_des, v_des, yaw_des, yaw_rate_des, J_base, dJv_base, stance) = args[:11]
-        (J_feet, dJv_feet, v_feet, p_feet, R_feet, n_swing, sw, sw_yaw) = args[11:19]
-        (J_hands, dJv_hands, hand_acc) = args[19:]
+        (q, v, R, omega, p_des, v_des, yaw_des, pitch_des, yaw_rate_des) = args[:9]
+        (J_base, dJv_base, stance) = args[9:12]
+        (J_feet, dJv_feet, v_feet, p_feet, R_feet, n_swing, sw, sw_yaw) = args[12:20]
+        (J_hands, dJv_hands, hand_acc) = args[20:]
         current.clear()
         packed = np.asarray(gains, dtype=float)
         sizes = [3, 3, 3, 3, 1, 1, 1, 1]
@@ -71,6 +72,7 @@ def record(scenario_path: str, seconds: float, every: int) -> dict[str, np.ndarr
             p_des=p_des.copy(),
             v_des=v_des.copy(),
             yaw_des=yaw_des,
+            pitch_des=pitch_des,
             yaw_rate_des=yaw_rate_des,
             J_base=J_base.copy(),
             dJv_base=dJv_base.copy(),
@@ -188,6 +190,7 @@ def kernel_inputs(rec: dict[str, np.ndarray], i: int) -> tuple[tuple[Any, ...], 
         rec["p_des"][i],
         rec["v_des"][i],
         float(rec["yaw_des"][i]),
+        float(rec["pitch_des"][i]) if "pitch_des" in rec else 0.0,
         float(rec["yaw_rate_des"][i]),
         rec["J_base"][i],
         rec["dJv_base"][i],

@@ -33,6 +33,7 @@ import numpy.typing as npt
 
 from locoplan.control import wbc_kernels
 from locoplan.control.contact import ContactLimits, ankle_row_binds, ankle_torque_row
+from locoplan.control.lean import TrunkLean
 from locoplan.control.mpc import MpcInput, MpcSettings, MpcSolution, MultiContactMpc
 from locoplan.control.recovery import (
     RecoverySchedule,
@@ -88,6 +89,11 @@ APPROACH_LABELS = frozenset(("tuck", "lift", "reach", "slide"))
 # Checked on the locomotion scripts of seeds 4711, 16180 and 27182 (120: one more succeeds,
 # none lost) and the 276 manipulation scripts of seeds 4711 and 5000 (the same runs succeed).
 STAND_SUPPORT_MARGIN = 0.02
+# Fastest change of the trunk's lean for a held load (rad/s; `_lean_limited`): the full
+# 25 deg in 1.5 s. On envelope seed 44021's 33 heaviest or failing manipulation runs, 26
+# succeed with it against 25 following the load's ramp (walk-carry-024 falls there) and 21
+# without a lean; not tuned further.
+LEAN_RATE = 0.3
 LOAD_LEAD = 0.3  # s by which the CoM shift for a held load leads the load itself
 # Time constant (s) of the low-pass filter on the measured hand load: above the 500 Hz tick's
 # contact noise, well below the 0.6-1.0 s load ramps it corrects.
@@ -424,6 +430,9 @@ class ControllerSettings:
     raibert_gain: float = 0.05
     # Whether the controller adds recovery steps (`locoplan.control.recovery`).
     recovery_steps: bool = True
+    # Whether the trunk leans back for a held load (`locoplan.control.lean`). Off: measured
+    # neutral on a fresh envelope seed (README, Envelope; CHANGELOG, Known limitations).
+    trunk_lean: bool = False
     # The hands' Cartesian PD (1/s^2, 1/s): 20 rad/s, critically damped. A robot.yaml
     # `hand_approach_kp` (H1's) replaces it on the way to a grasp (`_hand_gains`); elsewhere
     # it stays: a holding hand's PD accelerates the object too (`_object_generalized_force`
@@ -502,6 +511,10 @@ class LocoManipulationController:
         # Steps added to the plan's schedule (`_recover`).
         self.recovery = RecoverySchedule()
         self._shift_now = np.zeros(2)
+        # The trunk's lean back for a held load now (rad; `TrunkLean`), updated with the MPC.
+        self.lean = TrunkLean(robot) if self.s.trunk_lean else None
+        self._lean_now = 0.0
+        self._lean_t = -math.inf
         self._stand_offset = np.zeros(2)
         self._object_cache: dict[int, FloatArray] = {}
         # Measured-load feedback (see `_update_load`): filtered measured mass (kg) and the
@@ -956,6 +969,11 @@ class LocoManipulationController:
             planned_now = self._planned_object_positions(np.array([t]))[0]
             p_obj = p_obj + (p_hands_mid - planned_now)
         x_ref[:, 3:5] += shift[1:]
+        lean = self._lean(t_lead, mass_lead, pb_all[N + 1 + n_td :], yaw_all[N + 1 + n_td :])
+        if self.lean is not None:
+            lean = self._lean_limited(t, dt, lean)
+            self._lean_now = float(lean[0])
+            x_ref[:, 1] = -lean[1:]
         a_obj = self._planned_object_accelerations(t, dt, N) if held.any() else None
         inp = MpcInput(
             x0=x0,
@@ -974,6 +992,42 @@ class LocoManipulationController:
             model=self.s.model,
         )
         return self.mpc.update(inp)
+
+    def _lean(
+        self, times: FloatArray, mass: FloatArray, p_ref: FloatArray, yaw_ref: FloatArray
+    ) -> FloatArray:
+        """The trunk's lean back (rad, `TrunkLean`) at `times` (n,) for the held-load masses
+        `mass` (n,) the CoM shift uses there, the load held where the plan puts the object,
+        ahead of the trunk reference's position and heading there (p_ref (n, 3), yaw_ref
+        (n,)). Zero where nothing is held or with `trunk_lean` off."""
+        if self.lean is None or not np.any(mass > 0.0):
+            return np.zeros(len(times))
+        p_obj = self._planned_object_positions(times)
+        ahead = np.cos(yaw_ref) * (p_obj[:, 0] - p_ref[:, 0]) + np.sin(yaw_ref) * (
+            p_obj[:, 1] - p_ref[:, 1]
+        )
+        return self.lean.angles(mass, ahead)
+
+    def _lean_limited(self, t: float, dt: float, target: FloatArray) -> FloatArray:
+        """The lean `target` (N + 1,) at t and the horizon's steps, followed no faster than
+        LEAN_RATE from the lean in force at the last update (`_lean_now`, `_lean_t`).
+
+        Why: leaning the trunk back takes a backward pitching moment from the feet, and its
+        reaction pushes the hips and the centre of mass forward. Following the load's ramp
+        (0 to 23 deg in 0.5 s for a 7.8 kg box), HECTOR's CoM went 7 cm ahead of its
+        reference, onto its toes, the trunk sank 7 cm and the robot fell in the next turn
+        (envelope seed 44021, walk-carry-024)."""
+        if self.lean is None:
+            return np.zeros(len(target))
+        elapsed = max(0.0, t - self._lean_t) if math.isfinite(self._lean_t) else 0.0
+        self._lean_t = t
+        out = np.empty(len(target))
+        prev = self._lean_now
+        for i, goal in enumerate(target):
+            step = LEAN_RATE * (elapsed if i == 0 else dt)
+            prev = min(max(float(goal), prev - step), prev + step)
+            out[i] = prev
+        return out
 
     def _planned_object_accelerations(self, t: float, dt: float, n: int) -> FloatArray:
         """Planned acceleration (n, 3) of the held object at t + dt k, k = 1..n (m/s^2), by
@@ -1539,6 +1593,7 @@ class LocoManipulationController:
                 p_des,
                 np.asarray(ref.velocity, dtype=float),
                 float(ref.yaw),
+                -self._lean_now,
                 float(ref.yaw_rate),
                 J_fr[4],
                 dJv_fr[4],

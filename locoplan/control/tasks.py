@@ -94,6 +94,7 @@ def build_tasks(
     J_hands: list[FloatArray],
     dJv_hands: list[FloatArray],
     hand_acc: FloatArray,
+    pitch_des: float = 0.0,
 ) -> list[AccelerationTask]:
     """Tasks in priority order. `swing` holds (p, v, a, yaw) targets of the swing feet in
     foot order; `hand_acc` (2, 3) the hands' commanded accelerations (world, m/s^2).
@@ -114,6 +115,7 @@ def build_tasks(
         np.ascontiguousarray(p_base_des, dtype=float),
         np.ascontiguousarray(v_base_des, dtype=float),
         float(yaw_des),
+        float(pitch_des),
         float(yaw_rate_des),
         np.ascontiguousarray(J_base, dtype=float),
         np.ascontiguousarray(dJv_base, dtype=float),

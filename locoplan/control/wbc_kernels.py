@@ -40,20 +40,33 @@ N_GAINS = 16
 @njit(cache=True)
 def yaw_error(yaw: float, R: FloatArray) -> tuple[float, float, float]:
     """World rotation vector e with exp([e]x) R = R_z(yaw) (log map of E = R_z(yaw) R')."""
+    return yaw_pitch_error(yaw, 0.0, R)
+
+
+@njit(cache=True)
+def yaw_pitch_error(yaw: float, pitch: float, R: FloatArray) -> tuple[float, float, float]:
+    """World rotation vector e with exp([e]x) R = R_z(yaw) R_y(pitch) (log map of
+    E = R_z(yaw) R_y(pitch) R'); pitch < 0 is the trunk's nose up (ZYX angles)."""
     c, s = math.cos(yaw), math.sin(yaw)
-    r00, r01 = R[0, 0], R[0, 1]
-    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
-    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
-    r02 = R[0, 2]
-    # E = R_z R': E[i, j] = sum_k Rz[i, k] R[j, k].
-    e00, e01 = c * r00 - s * r01, c * r10 - s * r11
-    e10, e11 = s * r00 + c * r01, s * r10 + c * r11
-    e02, e12 = c * r20 - s * r21, s * r20 + c * r21
-    cos_t = max(-1.0, min(1.0, (e00 + e11 + r22 - 1.0) / 2.0))
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    # D = R_z(yaw) R_y(pitch) = [[c cp, -s, c sp], [s cp, c, s sp], [-sp, 0, cp]];
+    # E = D R': E[i, j] = sum_k D[i, k] R[j, k] (only the entries the log map needs).
+    d00, d01, d02 = c * cp, -s, c * sp
+    d10, d11, d12 = s * cp, c, s * sp
+    d20, d22 = -sp, cp
+    e00 = d00 * R[0, 0] + d01 * R[0, 1] + d02 * R[0, 2]
+    e11 = d10 * R[1, 0] + d11 * R[1, 1] + d12 * R[1, 2]
+    e22 = d20 * R[2, 0] + d22 * R[2, 2]
+    e01 = d00 * R[1, 0] + d01 * R[1, 1] + d02 * R[1, 2]
+    e10 = d10 * R[0, 0] + d11 * R[0, 1] + d12 * R[0, 2]
+    e02 = d00 * R[2, 0] + d01 * R[2, 1] + d02 * R[2, 2]
+    e20 = d20 * R[0, 0] + d22 * R[0, 2]
+    e12 = d10 * R[2, 0] + d11 * R[2, 1] + d12 * R[2, 2]
+    e21 = d20 * R[1, 0] + d22 * R[1, 2]
+    cos_t = max(-1.0, min(1.0, (e00 + e11 + e22 - 1.0) / 2.0))
     theta = math.acos(cos_t)
     f = 0.5 if theta < 1e-6 else theta / (2.0 * math.sin(theta))
-    # E[2, 1] = r12, E[2, 0] = r02.
-    return f * (r12 - e12), f * (e02 - r02), f * (e10 - e01)
+    return f * (e21 - e12), f * (e02 - e20), f * (e10 - e01)
 
 
 @njit(cache=True)
@@ -84,6 +97,7 @@ def stack_tasks(
     p_base_des: FloatArray,
     v_base_des: FloatArray,
     yaw_des: float,
+    pitch_des: float,
     yaw_rate_des: float,
     J_base: FloatArray,
     dJv_base: FloatArray,
@@ -133,7 +147,7 @@ def stack_tasks(
         ends[n_levels] = r
         n_levels += 1
     # Level 1: trunk position and orientation PD (the base's 6 DoF are independent).
-    ex, ey, ez = yaw_error(yaw_des, R_base)
+    ex, ey, ez = yaw_pitch_error(yaw_des, pitch_des, R_base)
     wx, wy, wz = omega_world[0], omega_world[1], omega_world[2]
     for i in range(3):
         vw = R_base[i, 0] * v[0] + R_base[i, 1] * v[1] + R_base[i, 2] * v[2]
@@ -387,6 +401,7 @@ def warm_up(nv: int) -> None:
         np.zeros(3),
         np.zeros(3),
         np.zeros(3),
+        0.0,
         0.0,
         0.0,
         J.copy(),

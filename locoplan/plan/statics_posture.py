@@ -124,29 +124,10 @@ class StancePostures:
         ]
         self.support_x = (min(x_points), max(x_points))
         self._shoulders = [model.getJointId(desc.joint_names[arm[0]]) for arm in self._arms]
-        self.hip_pitch_joints = self._hip_pitch_joints()
+        self.hip_pitch_joints = robot.hip_pitch_joints()
         self.max_reach = (self._longest_reach(0), self._longest_reach(1))
         self._legs_cache: dict[tuple[float, float], tuple[FloatArray, float]] = {}
         self._leg_reach: dict[float, float] = {}
-
-    def _hip_pitch_joints(self) -> tuple[int, ...]:
-        """Each leg's hip pitch (index into the joints): its first joint from the trunk whose
-        axis is the trunk's lateral one at the nominal pose (within 25 deg); a leg without
-        one contributes its first joint."""
-        model, data, desc = self.model, self.data, self.desc
-        pin.computeJointJacobians(model, data, self.q_nominal)
-        out = []
-        for leg in desc.leg_joint_indices:
-            joints = [int(j) for j in leg]
-            pitch = joints[0]
-            for j in joints:
-                jid = model.getJointId(desc.joint_names[j])
-                axis = pin.getJointJacobian(model, data, jid, _LWA)[3:, 6 + j]
-                if abs(axis[1]) > math.cos(math.radians(25.0)) * np.linalg.norm(axis):
-                    pitch = j
-                    break
-            out.append(pitch)
-        return tuple(out)
 
     def _longest_reach(self, hand: int) -> float:
         """Longest distance (m) from the arm's first joint to its hand within the joint

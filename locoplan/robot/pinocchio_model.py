@@ -13,6 +13,7 @@ acceleration in world axes; 6-vectors and 6-row Jacobians are ordered (linear, a
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -187,6 +188,26 @@ class PinocchioRobot:
         J = pin.getJointJacobian(model, self.data, jid, _LWA)
         axis = np.array(J[3:, model.joints[jid].idx_v])
         return np.array(self.data.oMi[jid].translation), axis
+
+    def hip_pitch_joints(self) -> tuple[int, ...]:
+        """Each leg's hip pitch (index into the joints) at the nominal pose: its first joint
+        from the trunk whose axis is the trunk's lateral one (within 25 deg); a leg without
+        one contributes its first joint. (Own pinocchio data: the last update is kept.)"""
+        model, desc = self.model, self.desc
+        data = model.createData()
+        pin.computeJointJacobians(model, data, self.nominal_q())
+        out = []
+        for leg in desc.leg_joint_indices:
+            joints = [int(j) for j in leg]
+            pitch = joints[0]
+            for j in joints:
+                jid = model.getJointId(desc.joint_names[j])
+                axis = pin.getJointJacobian(model, data, jid, _LWA)[3:, 6 + j]
+                if abs(axis[1]) > math.cos(math.radians(25.0)) * np.linalg.norm(axis):
+                    pitch = j
+                    break
+            out.append(pitch)
+        return tuple(out)
 
     # ------------------------------------------------------------------ frames
     def frame_pose(self, name: str) -> Pose:

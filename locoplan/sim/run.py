@@ -71,6 +71,9 @@ class RunOptions:
     pushes: tuple[Push, ...] = ()
     # The controller's recovery steps (`locoplan.control.recovery`); off for comparisons.
     recovery_steps: bool = True
+    # The trunk's lean for a held load (`locoplan.control.lean`; off by default: measured
+    # neutral, README, Envelope).
+    trunk_lean: bool = False
     log_name: str | None = None
     video: Path | None = None
     live: LiveView | None = None
@@ -343,6 +346,7 @@ def controller_settings(
         mpc=mpc,
         limits=limits,
         recovery_steps=options.recovery_steps,
+        trunk_lean=options.trunk_lean,
     )
 
 
