@@ -969,8 +969,8 @@ class LocoManipulationController:
             planned_now = self._planned_object_positions(np.array([t]))[0]
             p_obj = p_obj + (p_hands_mid - planned_now)
         x_ref[:, 3:5] += shift[1:]
-        lean = self._lean(t_lead, mass_lead, pb_all[N + 1 + n_td :], yaw_all[N + 1 + n_td :])
         if self.lean is not None:
+            lean = self._lean(t_lead, mass_lead, pb_all[N + 1 + n_td :], yaw_all[N + 1 + n_td :])
             lean = self._lean_limited(t, dt, lean)
             self._lean_now = float(lean[0])
             x_ref[:, 1] = -lean[1:]
