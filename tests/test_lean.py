@@ -149,7 +149,7 @@ def test_controller_lean_follows_the_load_no_faster_than_its_rate() -> None:
         ctl._update_load(float(t), hold.mass * 9.81 if hold.lift <= t < hold.release else 0.0)
         mass = ctl.shift_mass(t_lead)
         _, _, yaw, _, pb = ctl._com_reference(t_lead)
-        lean = ctl._lean_limited(float(t), dt, ctl._lean(t_lead, mass, pb, yaw))
+        lean = ctl._lean_limited(float(t), dt, ctl._lean(float(t), t_lead, mass, pb, yaw))
         ctl._lean_now = float(lean[0])
         assert np.all(np.abs(np.diff(lean)) <= LEAN_RATE * dt + 1e-12)
         leans.append(ctl._lean_now)

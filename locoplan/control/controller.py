@@ -431,7 +431,7 @@ class ControllerSettings:
     # Whether the controller adds recovery steps (`locoplan.control.recovery`).
     recovery_steps: bool = True
     # Whether the trunk leans back for a held load (`locoplan.control.lean`). Off: measured
-    # neutral on a fresh envelope seed (README, Envelope; CHANGELOG, Known limitations).
+    # about neutral on fresh envelope seeds (README, Envelope; CHANGELOG, Known limitations).
     trunk_lean: bool = False
     # The hands' Cartesian PD (1/s^2, 1/s): 20 rad/s, critically damped. A robot.yaml
     # `hand_approach_kp` (H1's) replaces it on the way to a grasp (`_hand_gains`); elsewhere
@@ -970,7 +970,8 @@ class LocoManipulationController:
             p_obj = p_obj + (p_hands_mid - planned_now)
         x_ref[:, 3:5] += shift[1:]
         if self.lean is not None:
-            lean = self._lean(t_lead, mass_lead, pb_all[N + 1 + n_td :], yaw_all[N + 1 + n_td :])
+            lead_rows = slice(N + 1 + n_td, None)
+            lean = self._lean(t, t_lead, mass_lead, pb_all[lead_rows], yaw_all[lead_rows])
             lean = self._lean_limited(t, dt, lean)
             self._lean_now = float(lean[0])
             x_ref[:, 1] = -lean[1:]
@@ -994,13 +995,29 @@ class LocoManipulationController:
         return self.mpc.update(inp)
 
     def _lean(
-        self, times: FloatArray, mass: FloatArray, p_ref: FloatArray, yaw_ref: FloatArray
+        self, t: float, times: FloatArray, mass: FloatArray, p_ref: FloatArray, yaw_ref: FloatArray
     ) -> FloatArray:
-        """The trunk's lean back (rad, `TrunkLean`) at `times` (n,) for the held-load masses
-        `mass` (n,) the CoM shift uses there, the load held where the plan puts the object,
-        ahead of the trunk reference's position and heading there (p_ref (n, 3), yaw_ref
-        (n,)). Zero where nothing is held or with `trunk_lean` off."""
+        """The trunk's lean back (rad, `TrunkLean`), decided at t, at `times` (n,) for the
+        held-load masses `mass` (n,) the CoM shift uses there, the load held where the plan
+        puts the object, ahead of the trunk reference's position and heading there (p_ref
+        (n, 3), yaw_ref (n,)). Zero where nothing is held, with `trunk_lean` off, and unless
+        a held object's load is wholly on at t (from LOAD_RAMP after its lift-off to its
+        release; not for throws).
+
+        Why not from the lift-off (led by LOAD_LEAD like the CoM shift): the lift is the
+        transient in which a heavy box's weight pulls the CoM towards it; a lean coming on
+        then, pitching the trunk back, pushed the CoM further forward, past the toes (envelope
+        seed 46021: walk-carry-006 and -027 in both strategies, 7.2-7.4 kg, fell in or just
+        after the lift with the lean from the lift-off). On the thirteen runs of that seed
+        whose outcome the early lean changed, 11 succeed with this one against 7 without a
+        lean (walk-carry-011 in both strategies, transfer-003 and -026 gained, none lost)."""
         if self.lean is None or not np.any(mass > 0.0):
+            return np.zeros(len(times))
+        if not any(
+            h.lift + LOAD_RAMP <= t < h.release
+            for h in self.plan.holds
+            if h.release_kind != "throw"
+        ):
             return np.zeros(len(times))
         p_obj = self._planned_object_positions(times)
         ahead = np.cos(yaw_ref) * (p_obj[:, 0] - p_ref[:, 0]) + np.sin(yaw_ref) * (

@@ -36,9 +36,13 @@ at 35 deg, of the 0.436 m its knee's 15 deg stop allows (H1: 0.739, 0.766, 0.786
 and a stepping leg needs some of what is left. The controller changes the lean no faster
 than LEAN_RATE (`LocoManipulationController._lean_limited`).
 
-Measured (README, Envelope): on envelope seed 44021's 33 heaviest or failing manipulation runs
-(both strategies) 26 succeed with it against 21 without; on fresh seed 46021, paired, 386 of
-400 against 387. Neutral on the envelope, so `ControllerSettings.trunk_lean` is off by default.
+Measured (README, Envelope), always paired with the code without it: on envelope seed
+44021's 33 heaviest or failing manipulation runs (both strategies) 26 succeed with it (led by
+the load like the CoM shift) against 21; on fresh seed 46021 386 of 400 against 387. Started
+only once the load is wholly on (the controller's `_lean`), 11 of the 13 46021 runs the early
+lean changed succeed against 7; then on fresh seed 47021 397 of 400 against 399, and H1 on
+fresh seed 46027 199 of 200 (its one fall comes before the grasp, as without it). About
+neutral on the envelope, so `ControllerSettings.trunk_lean` is off by default.
 """
 
 from __future__ import annotations
