@@ -31,6 +31,16 @@ def hector_scenario_files() -> list[Path]:
     return [p for p in scenario_files() if load_scenario(p).robot == "hector"]
 
 
+def stand_script(robot: str, duration: float) -> str:
+    """A script in which `robot` only stands for `duration` s."""
+    return f"""version: 1
+name: {robot}-stand
+robot: {robot}
+tasks:
+  - {{action: stand, start: 0.0, duration: {duration}}}
+"""
+
+
 def hold_script(mass: float, robot: str | None = None) -> str:
     """A standing hold from a table in front, put back (issue 12's hold-11kg geometry)."""
     head = f"robot: {robot}\n" if robot else ""

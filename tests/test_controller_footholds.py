@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 import pytest
-from plan_fixtures import scenario_from_text
+from plan_fixtures import scenario_from_text, stand_script
 
 from locoplan.control.controller import (
     GRAVITY,
@@ -30,13 +30,7 @@ tasks:
 end: 3.5
 """
 
-H1_STAND = """
-version: 1
-name: h1-stand
-robot: h1
-tasks:
-  - {action: stand, start: 0.0, duration: 1.0}
-"""
+H1_STAND = stand_script("h1", 1.0)
 
 
 def test_turning_footholds_keep_the_hip_yaw_within_its_room() -> None:

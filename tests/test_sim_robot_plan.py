@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from plan_fixtures import repo_scenario, scenario_from_text
+from plan_fixtures import repo_scenario, scenario_from_text, stand_script
 
 from locoplan.plan import PlanError, compile_plan
 from locoplan.plan import constants as k
@@ -16,13 +16,7 @@ from locoplan.robot.pinocchio_model import PinocchioRobot
 from locoplan.scenario.model import Scenario
 from locoplan.sim.robot_plan import compile_robot_plan
 
-H1_STAND = """
-version: 1
-name: h1-stand
-robot: h1
-tasks:
-  - {action: stand, start: 0.0, duration: 2.0}
-"""
+H1_STAND = stand_script("h1", 2.0)
 
 
 def test_hector_plans_as_compile_plan_defaults() -> None:

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from plan_fixtures import repo_scenario, scenario_from_text
+from plan_fixtures import repo_scenario, scenario_from_text, stand_script
 
 from locoplan.control.controller import ControllerSettings
 from locoplan.robot.description import load_robot_description
 from locoplan.sim.run import RunOptions, controller_settings
 
-H1_STAND = "version: 1\nname: s\nrobot: h1\ntasks:\n  - {action: stand, start: 0, duration: 1}\n"
+H1_STAND = stand_script("h1", 1.0)
 
 
 def test_hector_settings_are_the_former_constants() -> None:

@@ -87,7 +87,7 @@ class TrunkLean:
             moment += inertia.mass * np.asarray(inertia.lever)
         upper = R.T.dot(moment / mass - base)
         hips = [
-            R.T.dot(np.asarray(data.oMi[model.getJointId(desc.joint_names[j])].translation) - base)
+            R.T.dot(np.asarray(data.oMi[model.getJointId(names[j])].translation) - base)
             for j in robot.hip_pitch_joints()
         ]
         hip = np.mean(hips, axis=0)
