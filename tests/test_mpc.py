@@ -327,3 +327,59 @@ def test_least_distance_edge_schedules(stance_at_0: bool) -> None:
     assert sol.ok and ref.ok
     # 1e-5 relative as in test_formulations_and_backends_agree (cond(H) ~ 1e7).
     assert np.linalg.norm(sol.U - ref.U) / np.linalg.norm(ref.U) < 1e-5
+
+
+def _sinking(t: float = 0.0) -> MpcInput:
+    """Stepping, with the reference 0.12 m below the CoM: the QP wants the feet unloaded."""
+    inp = make_input(contact=stepping_contact(), v0=(0.2, -0.1, 0.0))
+    x_ref = inp.x_ref.copy()
+    x_ref[:, 5] -= 0.12  # z of the CoM (srbd.POS = 3:6)
+    return replace(inp, x_ref=x_ref, t=t)
+
+
+def _summed_fz(U: np.ndarray, contact: np.ndarray) -> np.ndarray:
+    return np.where(contact, U[:, :, 2], 0.0).sum(axis=1)
+
+
+def test_support_fraction_bounds_the_summed_vertical_force() -> None:
+    inp = _sinking()
+    need = 0.6 * MASS * G
+    free = MultiContactMpc(MpcSettings(qp=TIGHT)).update(inp)
+    assert free.ok
+    # Without the bound the QP takes both feet to f_min at the first steps (the test's premise).
+    assert _summed_fz(free.U, inp.contact).min() < 0.5 * need
+    results = {}
+    for formulation in ("condensed", "sparse"):
+        for backend in BACKENDS:
+            s = MpcSettings(
+                formulation=formulation, backend=backend, qp=TIGHT, support_fraction=0.6
+            )
+            sol = MultiContactMpc(s).update(inp)
+            assert sol.ok and sol.fallback == "none", (formulation, backend, sol.status)
+            # 1e-3 N: the solvers' eps_abs (1e-10 here) on forces of O(100) N, with margin.
+            assert _summed_fz(sol.U, inp.contact).min() >= need - 1e-3, (formulation, backend)
+            assert np.all(sol.U[inp.contact][:, 2] >= s.f_min - 1e-3)
+            results[(formulation, backend)] = sol.U
+    ref = results[("condensed", "piqp")]
+    for key, U in results.items():
+        # As in test_formulations_and_backends_agree (cond(H) ~ 1e7).
+        assert np.linalg.norm(U - ref) / np.linalg.norm(ref) < 1e-5, key
+
+
+def test_support_fraction_with_warm_starts_and_the_relaxed_retry() -> None:
+    # The summed rows come after the wrench rows: the shifted active set of the previous
+    # update (daqp's warm start) must skip them and still reach the fresh optimum.
+    s = MpcSettings(support_fraction=0.6)
+    mpc = MultiContactMpc(s)
+    for i in range(3):
+        inp = _sinking(0.03 * i)
+        warm = mpc.update(inp)
+        fresh = MultiContactMpc(replace(s, qp=replace(s.qp, warm_start=False))).update(inp)
+        assert warm.ok and fresh.ok
+        assert np.linalg.norm(warm.U - fresh.U) / np.linalg.norm(fresh.U) < 1e-5
+    # f_min > f_max: the relaxed retry (f_min = 0, the summed rows at 0 N) still gives forces.
+    bad = MpcSettings(f_min=300.0, f_max=250.0, support_fraction=0.6)
+    sol = MultiContactMpc(bad).update(_sinking())
+    assert not sol.ok and sol.fallback == "relaxed"
+    with pytest.raises(ValueError):
+        MpcSettings(support_fraction=1.5)

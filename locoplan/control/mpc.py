@@ -181,6 +181,9 @@ class MpcSettings:
     qp: QpSettings = field(default_factory=_default_qp_settings)
     fallback: bool = True
     relaxed_qp: QpSettings | None = None
+    # The stance feet's vertical forces at every step sum to at least this fraction of the
+    # weight m g (`MultiContactMpc._support`); 0: only f_min per foot.
+    support_fraction: float = 0.0
 
     def __post_init__(self) -> None:
         if not self.dt > 0:
@@ -193,6 +196,8 @@ class MpcSettings:
             raise ValueError("MpcSettings.r_diag needs 10 positive weights")
         if self.mu < 0 or self.toe < 0 or self.heel < 0:
             raise ValueError("MpcSettings: mu, toe and heel must be >= 0")
+        if not 0.0 <= self.support_fraction <= 1.0:
+            raise ValueError("MpcSettings.support_fraction must be in [0, 1]")
         if self.mu_torsion is not None and self.mu_torsion < 0:
             raise ValueError("MpcSettings.mu_torsion must be >= 0")
         if self.ankle_row is not None and not (len(self.ankle_row) == 5 and self.ankle_torque > 0):
@@ -319,6 +324,20 @@ class _Constraints:
     box: npt.NDArray[np.int64]
 
 
+@dataclass(frozen=True, slots=True)
+class _Support:
+    """The bound on the stance feet's summed vertical force (`MultiContactMpc._support`):
+    ``pairs`` (P, 2) the Fz variables of the steps with both feet in stance (one row
+    Fz_1 + Fz_2 >= ``need`` each, appended after the wrench rows), ``single`` the Fz
+    variables of the steps with one foot in stance (their lower bound raised to ``need``);
+    indices among the ``n_w`` wrench variables."""
+
+    pairs: npt.NDArray[np.intp]
+    single: npt.NDArray[np.intp]
+    need: float
+    n_w: int
+
+
 class MultiContactMpc:
     """The MPC across updates: keeps the QP solver, cached matrices, the previous solution."""
 
@@ -344,6 +363,8 @@ class MultiContactMpc:
         # Previous QP's active constraints and stance foot-steps (k, foot), for the hint.
         self._prev_active: npt.NDArray[np.intp] | None = None
         self._prev_fs: npt.NDArray[np.intp] | None = None
+        # Constraint rows of the previous QP (the wrench rows, then the summed force's).
+        self._prev_n_in = 0
 
     # --- caches ----------------------------------------------------------------------------
 
@@ -374,6 +395,63 @@ class MultiContactMpc:
             self._cons_cache.clear()
         self._cons_cache[key] = cons
         return cons
+
+    def _support(self, cols: npt.NDArray[np.intp], mass: float, f_min: float) -> _Support | None:
+        """The summed vertical force bound of ``settings.support_fraction`` (None when 0).
+
+        Why: the per-foot f_min lets the QP take both feet down to f_min together, which it
+        does when the combined centre of mass is ahead of the toes (after a heavy lift, or
+        running on at the end of a walk): no vertical force then pitches the body back, so
+        the QP trades height for pitch and the trunk drops 10+ cm within a few steps; the
+        WBC follows and the knees fold (46021 walk-carry-027 at 1.30 s after a 7.35 kg
+        lift: 20 N on both feet as recorded, the weight with the CoM's 0.36 m/s forward
+        velocity zeroed). The bound keeps the vertical deceleration the QP may choose
+        below (1 - fraction) g at every step; the pitch then has to come from the CoP and
+        the steps.
+        """
+        frac = self.settings.support_fraction
+        if frac <= 0.0:
+            return None
+        fs = cols[::5] // 5
+        k = fs // 2
+        fz = 5 * np.arange(fs.shape[0], dtype=np.intp) + 2
+        # Foot-steps come grouped by step, foot 1 before foot 2: a pair is two neighbours.
+        first = np.flatnonzero(k[1:] == k[:-1])
+        paired = np.zeros(fs.shape[0], dtype=bool)
+        paired[first] = True
+        paired[first + 1] = True
+        need = max(f_min, min(self.settings.f_max, frac * mass * srbd.GRAVITY))
+        return _Support(
+            pairs=np.stack([fz[first], fz[first + 1]], axis=1),
+            single=fz[~paired],
+            need=need,
+            n_w=5 * fs.shape[0],
+        )
+
+    @staticmethod
+    def _with_support(qp: QpProblem, sup: _Support | None) -> QpProblem:
+        """``qp`` with the summed vertical force bound added (``qp`` itself when None). The
+        wrench variables are the QP's last; the rows go after its wrench rows."""
+        if sup is None or qp.C is None or qp.l is None or qp.u is None or qp.x_lower is None:
+            return qp
+        off = qp.n - sup.n_w
+        x_lower = qp.x_lower.copy()
+        x_lower[off + sup.single] = np.maximum(x_lower[off + sup.single], sup.need)
+        P = sup.pairs.shape[0]
+        if P == 0:
+            return replace(qp, x_lower=x_lower)
+        S = np.zeros((P, qp.n))
+        r = np.arange(P)
+        S[r, off + sup.pairs[:, 0]] = 1.0
+        S[r, off + sup.pairs[:, 1]] = 1.0
+        C = np.vstack([qp.C, S]) if isinstance(qp.C, np.ndarray) else sp.vstack([qp.C, S])
+        return replace(
+            qp,
+            C=C if isinstance(C, np.ndarray) else sp.csc_matrix(C),
+            l=np.concatenate([qp.l, np.full(P, sup.need)]),
+            u=np.concatenate([qp.u, np.full(P, np.inf)]),
+            x_lower=x_lower,
+        )
 
     # --- problem construction --------------------------------------------------------------
 
@@ -506,14 +584,15 @@ class MultiContactMpc:
                 0,
                 None,
             )
-        qp, Lam, Gam = self._problem(inp, st, kern, x_free, s.f_min, s.f_max)
+        sup = self._support(st.cols, inp.mass, s.f_min)
+        qp, Lam, Gam = self._problem(inp, st, kern, x_free, s.f_min, s.f_max, sup)
         shift = self._shift(inp)
         # Only daqp with warm_start reads the hint (the other backends ignore it).
         warm = s.qp.warm_start and s.formulation == "condensed"
         hint = self._active_hint(st.cols, qp, shift) if warm else None
         ldp = None
         if Lam is not None and Gam is not None and s.backend == "daqp":
-            ldp = self._least_distance(qp, Lam, Gam, st.cols)
+            ldp = self._least_distance(qp, Lam, Gam, st.cols, sup)
         t1 = time.perf_counter()
         sol = self._solver.solve(qp, active_hint=hint, least_distance=ldp)
         t2 = time.perf_counter()
@@ -526,7 +605,10 @@ class MultiContactMpc:
             if not s.fallback:
                 raise SolverFailure(inp.t, "mpc", s.backend, sol.status)
             t3 = time.perf_counter()
-            relaxed_qp = self._problem(inp, st, kern, x_free, 0.0, max(s.f_max, s.f_min))[0]
+            # The summed force's rows stay (with 0 N, implied by Fz >= 0) so that the
+            # least-distance form's W still matches the rows.
+            sup0 = None if sup is None else replace(sup, need=0.0)
+            relaxed_qp = self._problem(inp, st, kern, x_free, 0.0, max(s.f_max, s.f_min), sup0)[0]
             relaxed_settings = s.relaxed_qp if s.relaxed_qp is not None else _relaxed(s.qp)
             # Same H and the same finite box sides (f_min = 0 is finite): same form.
             relaxed = QpSolver(s.backend, relaxed_settings).solve(relaxed_qp, least_distance=ldp)
@@ -551,6 +633,7 @@ class MultiContactMpc:
         if used.ok and warm:
             self._prev_active = active_constraint_ids(used)
             self._prev_fs = st.cols[::5] // 5
+            self._prev_n_in = qp.n_in
         else:
             self._prev_active = None
         F0 = U[0, :, 0:3].copy()
@@ -586,7 +669,8 @@ class MultiContactMpc:
         kern = self._get_kernel(np.ascontiguousarray(inp.yaw_lin, dtype=np.float64), Ib)
         st = step_terms(inp, s.dt, kern.Iinv, Ib)
         x_free = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, st.tau_ext, st.f_ext, s.dt)
-        return self._problem(inp, st, kern, x_free, s.f_min, s.f_max)[0]
+        sup = self._support(st.cols, inp.mass, s.f_min)
+        return self._problem(inp, st, kern, x_free, s.f_min, s.f_max, sup)[0]
 
     def _problem(
         self,
@@ -596,11 +680,14 @@ class MultiContactMpc:
         x_free: FloatArray,
         f_min: float,
         f_max: float,
+        sup: _Support | None = None,
     ) -> tuple[QpProblem, FloatArray | None, FloatArray | None]:
-        """The QP in the configured formulation, with the Hessian's generators (condensed)."""
+        """The QP in the configured formulation, with the Hessian's generators (condensed),
+        and the summed vertical force bound ``sup`` (`_support`) if given."""
         if self.settings.formulation == "sparse":
-            return self._sparse(inp, st, kern, f_min, f_max), None, None
-        return self._condensed(inp, st, kern, x_free, f_min, f_max)
+            return self._with_support(self._sparse(inp, st, kern, f_min, f_max), sup), None, None
+        qp, Lam, Gam = self._condensed(inp, st, kern, x_free, f_min, f_max)
+        return self._with_support(qp, sup), Lam, Gam
 
     def _finish(
         self, inp: MpcInput, st: StepTerms, kern: Kernel, U_foot: FloatArray
@@ -618,7 +705,12 @@ class MultiContactMpc:
         return U, X
 
     def _least_distance(
-        self, qp: QpProblem, Lam: FloatArray, Gam: FloatArray, cols: npt.NDArray[np.int64]
+        self,
+        qp: QpProblem,
+        Lam: FloatArray,
+        Gam: FloatArray,
+        cols: npt.NDArray[np.int64],
+        sup: _Support | None = None,
     ) -> LeastDistanceForm | None:
         """The `LeastDistanceForm` of the condensed QP from the generators of its Hessian.
 
@@ -627,7 +719,8 @@ class MultiContactMpc:
         Hessian's semi-separable structure); x_u = -H^-1 g by substitution with it. U and W
         are built only when x_u violates a bound (the solver asks): L as a dense matrix (one
         BLAS product), U = L^-T by LAPACK's trtri, W = [U[box]; C U] with C block-diagonal
-        (the same wrench rows per stance foot-step). None if H is not positive definite (the
+        (the same wrench rows per stance foot-step), then the summed vertical force's rows
+        (`_support`: the sum of two rows of U each). None if H is not positive definite (the
         solver then gets the plain problem and reports it).
         """
         start, size = mpc_kernels.factor_blocks(cols)
@@ -649,7 +742,10 @@ class MultiContactMpc:
                 # The diagonal of a Cholesky factor is positive: trtri cannot fail.
                 assert info == 0
                 U = np.ascontiguousarray(U_F)
-                built.append((U, mpc_kernels.constraint_rows(U, rows, box)))
+                W = mpc_kernels.constraint_rows(U, rows, box)
+                if sup is not None and sup.pairs.shape[0]:
+                    W = np.vstack([W, U[sup.pairs[:, 0]] + U[sup.pairs[:, 1]]])
+                built.append((U, W))
             return built[0]
 
         return LeastDistanceForm(x_u=x_u, factors=factors, box=box)
@@ -668,9 +764,12 @@ class MultiContactMpc:
         R = self._rows.shape[0]
         ids = self._prev_active
         n_fs_old = self._prev_fs.shape[0]
-        m_old, n_old = n_fs_old * R, n_fs_old * 5
+        m_old, n_old = self._prev_n_in, n_fs_old * 5
         upper = ids >= m_old + n_old
         j = np.where(upper, ids - (m_old + n_old), ids)
+        # The summed force's rows (after the wrench rows) are not carried over.
+        summed = (j >= n_fs_old * R) & (j < m_old)
+        ids, upper, j = ids[~summed], upper[~summed], j[~summed]
         is_row = j < m_old
         fs_old = np.where(is_row, j // R, (j - m_old) // 5)
         within = np.where(is_row, j % R, (j - m_old) % 5)
