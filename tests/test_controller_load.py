@@ -17,6 +17,7 @@ from locoplan.control.controller import (
     rigid_pair_targets,
 )
 from locoplan.plan import compile_plan
+from locoplan.plan.payload import grasp_reach_limit
 from locoplan.robot.description import load_robot_description
 from locoplan.robot.pinocchio_model import PinocchioRobot
 
@@ -226,6 +227,36 @@ def test_a_released_pair_eases_from_the_objects_width_to_the_planned_targets() -
     # float time difference may land a hair short of the blend's end, so look past it.)
     np.testing.assert_array_equal(ctl._released_pair_targets(t_r + 2 * blend, planned), planned)
     assert ctl._pair_release[0] == -np.inf
+
+
+def test_a_grip_closed_high_raises_the_hands_while_it_holds_then_fades() -> None:
+    """Each hand's height error when its contact starts is added to its targets while the
+    contact lasts (the object then follows its planned path), limited to the planner's grasp
+    tolerance (`grasp_reach_limit`), and faded out over the release blend after the contact
+    ends (smoothstep: all at its end, half at mid-blend, none after); x and y untouched."""
+    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    contact = plan.manipulation.contact_intervals
+    c0, c1 = float(contact[0].start[0]), float(contact[0].end[0])
+    assert (float(contact[1].start[0]), float(contact[1].end[0])) == (c0, c1)
+    limit = grasp_reach_limit(plan.geometry)
+    planned = np.array([[0.30, 0.07, 0.10], [0.30, -0.07, 0.10]])
+    # Left hand 2 cm high, right beyond the limit: nothing added before the contact.
+    high = planned + np.array([[0.0, 0.0, 0.02], [0.0, 0.0, 2.0 * limit]])
+    np.testing.assert_array_equal(ctl._grip_corrected(c0 - 0.01, planned, high), planned)
+    added = np.array([0.02, limit])
+    # Measured when the contact starts, held while it lasts (later errors are not measured).
+    for t, hands in ((c0 + 1e-6, high), (0.5 * (c0 + c1), planned), (c1 - 1e-6, planned)):
+        out = ctl._grip_corrected(t, planned, hands)
+        np.testing.assert_array_equal(out[:, :2], planned[:, :2])
+        np.testing.assert_allclose(out[:, 2], planned[:, 2] + added, rtol=0, atol=1e-12)
+    # Faded out after the contact's end.
+    blend = ctl._pair_blend
+    for u, share in ((0.0, 1.0), (0.5, 0.5)):
+        out = ctl._grip_corrected(c1 + u * blend, planned, planned)
+        np.testing.assert_allclose(out[:, 2], planned[:, 2] + share * added, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(ctl._grip_corrected(c1 + 2 * blend, planned, planned), planned)
 
 
 def test_com_shift_lags_an_object_that_comes_in() -> None:

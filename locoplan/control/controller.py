@@ -55,6 +55,7 @@ from locoplan.control.wbc import (
 from locoplan.control.wbc_kernels import stack_tasks
 from locoplan.exceptions import SolverFailure
 from locoplan.plan import ObjectHold, Plan
+from locoplan.plan.payload import grasp_reach_limit
 from locoplan.robot.arm_range import narrowed_bounds, working_range
 from locoplan.robot.conventions import pin_base_rotation
 from locoplan.robot.description import RobotDescription
@@ -547,6 +548,12 @@ class LocoManipulationController:
         # Last two-hand hold: (time, offset (3,) m of the pair's separation from the plan's).
         self._pair_release: tuple[float, FloatArray] = (-math.inf, np.zeros(3))
         self._pair_blend = RELEASE_BLEND_TAU_RATIO / math.sqrt(self.s.hand_kp_acc)
+        # Each hand's grip height error (`_grip_corrected`): measured when its contact starts,
+        # held while it lasts, then faded out over _pair_blend s from the time it ended.
+        self._grip_dz = np.zeros(2)
+        self._grip_on = [False, False]
+        self._grip_off = np.full(2, -math.inf)
+        self._grip_dz_max = grasp_reach_limit(plan.geometry)
         self._hold_mass = sum(h.mass for h in plan.holds)
         starts = {task.index: task.start for task in plan.tasks}
         self._drop_windows = [
@@ -1155,6 +1162,46 @@ class LocoManipulationController:
         self._shift_offset = self._mass_shift - planned
         self._load_t = t
 
+    def _grip_corrected(self, t: float, targets: FloatArray, p_hands: FloatArray) -> FloatArray:
+        """Hand targets (2, 3) raised by how far above its planned point each hand closed on
+        its object: the height error of the hand (measured, less the plan's target) when its
+        contact starts, within `grasp_reach_limit` (the planner's tolerance for a grip point
+        beyond the arms' reach), added while the contact lasts and faded out (smoothstep, as
+        `_released_pair_targets`) after it ends.
+
+        Why: the grasp closes where the hands are, and a hand that cannot get down to a grip
+        point at the edge of its reach closes higher on the box; the plan's hold then
+        carries the box that much lower than it planned all the way to its target (envelope
+        seed 46021, walk-carry-012: the hands stopped 3.7 cm above a grip point 1.9 cm
+        beyond their reach, the box hung 3.4 cm lower than planned, its bottom level with
+        the platform's top, the move over the platform pushed it into the platform's edge and
+        it fell to the floor at the release). With the error added, the object follows its
+        planned path and is set down where the plan puts it."""
+        out = targets
+        for k in range(2):
+            on = self.plan.hand_contact(k, t)
+            if on and not self._grip_on[k]:
+                err = float(p_hands[k, 2] - targets[k, 2])
+                self._grip_dz[k] = min(max(err, -self._grip_dz_max), self._grip_dz_max)
+                self._grip_on[k] = True
+            elif not on and self._grip_on[k]:
+                self._grip_on[k] = False
+                self._grip_off[k] = t
+            dz = float(self._grip_dz[k])
+            if dz == 0.0:
+                continue
+            weight = 1.0
+            if not on:
+                u = (t - float(self._grip_off[k])) / self._pair_blend
+                if u >= 1.0:
+                    self._grip_dz[k] = 0.0
+                    continue
+                weight = 1.0 - u * u * (3.0 - 2.0 * u)
+            if out is targets:
+                out = np.array(targets, dtype=float, copy=True)
+            out[k, 2] += weight * dz
+        return out
+
     def _released_pair_targets(self, t: float, targets: FloatArray) -> FloatArray:
         """Hand targets (2, 3) just after a two-hand release: the plan's, with the pair's
         separation at the release (`rigid_pair_targets`: the object's width) easing into the
@@ -1565,6 +1612,7 @@ class LocoManipulationController:
         hand_targets, v_hand_des = plan.hand_target_arrays(t, q[:3], yaw, v_base, yaw_rate)
         J_hands = np.ascontiguousarray(J_fr[2:4, :3])
         p_hands = p_fr[2:4]
+        hand_targets = self._grip_corrected(t, hand_targets, p_hands)
         v_hands = v_fr[2:4, :3]
         if self._supported:
             # Guarded lowering: once what the hands hold rests on something (the measured load
