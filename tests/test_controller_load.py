@@ -229,29 +229,37 @@ def test_a_released_pair_eases_from_the_objects_width_to_the_planned_targets() -
     assert ctl._pair_release[0] == -np.inf
 
 
-def test_a_grip_closed_high_raises_the_hands_while_it_holds_then_fades() -> None:
-    """Each hand's height error when its contact starts is added to its targets while the
-    contact lasts (the object then follows its planned path), limited to the planner's grasp
-    tolerance (`grasp_reach_limit`), and faded out over the release blend after the contact
-    ends (smoothstep: all at its end, half at mid-blend, none after); x and y untouched."""
+def test_a_grip_closed_high_raises_the_hands_once_the_load_is_on_then_fades() -> None:
+    """Each hand's height error when its contact starts, limited to the planner's grasp
+    tolerance (`grasp_reach_limit`), is added to its targets (the object then follows its
+    planned path): eased in over LOAD_RAMP from the hold's lift-off (smoothstep: none until
+    the lift-off, half at mid-ramp, all after), held while the contact lasts, faded out over
+    the release blend after it ends (all at its end, half at mid-blend, none after); later
+    errors are not measured, x and y are untouched."""
     plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
     desc = load_robot_description("hector")
     ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
     contact = plan.manipulation.contact_intervals
     c0, c1 = float(contact[0].start[0]), float(contact[0].end[0])
     assert (float(contact[1].start[0]), float(contact[1].end[0])) == (c0, c1)
+    (hold,) = plan.holds
+    assert c0 < hold.lift and hold.lift + LOAD_RAMP < c1
     limit = grasp_reach_limit(plan.geometry)
     planned = np.array([[0.30, 0.07, 0.10], [0.30, -0.07, 0.10]])
     # Left hand 2 cm high, right beyond the limit: nothing added before the contact.
     high = planned + np.array([[0.0, 0.0, 0.02], [0.0, 0.0, 2.0 * limit]])
     np.testing.assert_array_equal(ctl._grip_corrected(c0 - 0.01, planned, high), planned)
     added = np.array([0.02, limit])
-    # Measured when the contact starts, held while it lasts (later errors are not measured).
-    for t, hands in ((c0 + 1e-6, high), (0.5 * (c0 + c1), planned), (c1 - 1e-6, planned)):
+    for t, hands, share in (
+        (c0 + 1e-6, high, 0.0),  # measured here, not added before the lift-off
+        (hold.lift, planned, 0.0),
+        (hold.lift + 0.5 * LOAD_RAMP, planned, 0.5),
+        (hold.lift + LOAD_RAMP, planned, 1.0),
+        (c1 - 1e-6, planned, 1.0),
+    ):
         out = ctl._grip_corrected(t, planned, hands)
         np.testing.assert_array_equal(out[:, :2], planned[:, :2])
-        np.testing.assert_allclose(out[:, 2], planned[:, 2] + added, rtol=0, atol=1e-12)
-    # Faded out after the contact's end.
+        np.testing.assert_allclose(out[:, 2], planned[:, 2] + share * added, rtol=0, atol=1e-12)
     blend = ctl._pair_blend
     for u, share in ((0.0, 1.0), (0.5, 0.5)):
         out = ctl._grip_corrected(c1 + u * blend, planned, planned)

@@ -54,7 +54,7 @@ from locoplan.control.wbc import (
 )
 from locoplan.control.wbc_kernels import stack_tasks
 from locoplan.exceptions import SolverFailure
-from locoplan.plan import ObjectHold, Plan
+from locoplan.plan import HAND_NAMES, ObjectHold, Plan
 from locoplan.plan.payload import grasp_reach_limit
 from locoplan.robot.arm_range import narrowed_bounds, working_range
 from locoplan.robot.conventions import pin_base_rotation
@@ -549,10 +549,12 @@ class LocoManipulationController:
         self._pair_release: tuple[float, FloatArray] = (-math.inf, np.zeros(3))
         self._pair_blend = RELEASE_BLEND_TAU_RATIO / math.sqrt(self.s.hand_kp_acc)
         # Each hand's grip height error (`_grip_corrected`): measured when its contact starts,
-        # held while it lasts, then faded out over _pair_blend s from the time it ended.
+        # eased in over LOAD_RAMP s from its hold's lift-off, faded out over _pair_blend s
+        # from the time the contact ended.
         self._grip_dz = np.zeros(2)
         self._grip_on = [False, False]
         self._grip_off = np.full(2, -math.inf)
+        self._grip_lift = np.full(2, math.inf)
         self._grip_dz_max = grasp_reach_limit(plan.geometry)
         self._hold_mass = sum(h.mass for h in plan.holds)
         starts = {task.index: task.start for task in plan.tasks}
@@ -1166,7 +1168,8 @@ class LocoManipulationController:
         """Hand targets (2, 3) raised by how far above its planned point each hand closed on
         its object: the height error of the hand (measured, less the plan's target) when its
         contact starts, within `grasp_reach_limit` (the planner's tolerance for a grip point
-        beyond the arms' reach), added while the contact lasts and faded out (smoothstep, as
+        beyond the arms' reach), eased in (smoothstep) over LOAD_RAMP s from the hold's
+        lift-off, while the contact lasts, and faded out (smoothstep, as
         `_released_pair_targets`) after it ends.
 
         Why: the grasp closes where the hands are, and a hand that cannot get down to a grip
@@ -1176,7 +1179,11 @@ class LocoManipulationController:
         beyond their reach, the box hung 3.4 cm lower than planned, its bottom level with
         the platform's top, the move over the platform pushed it into the platform's edge and
         it fell to the floor at the release). With the error added, the object follows its
-        planned path and is set down where the plan puts it."""
+        planned path and is set down where the plan puts it. Eased in only once the load is
+        wholly on: added at the grip, it changed how heavy lifts loaded the robot (envelope
+        seed 48021: transfer-052 in both strategies and dynamic transfer-037, 5.8-5.9 kg
+        gripped 1-2.5 cm high, fell in the lift with it and not without); after the lift
+        it raises the box during the carry, before any drop."""
         out = targets
         for k in range(2):
             on = self.plan.hand_contact(k, t)
@@ -1184,19 +1191,24 @@ class LocoManipulationController:
                 err = float(p_hands[k, 2] - targets[k, 2])
                 self._grip_dz[k] = min(max(err, -self._grip_dz_max), self._grip_dz_max)
                 self._grip_on[k] = True
+                name = HAND_NAMES[k]
+                lifts = [h.lift for h in self.plan.holds if name in h.hands and t < h.release]
+                self._grip_lift[k] = min(lifts, default=math.inf)
             elif not on and self._grip_on[k]:
                 self._grip_on[k] = False
                 self._grip_off[k] = t
             dz = float(self._grip_dz[k])
             if dz == 0.0:
                 continue
-            weight = 1.0
+            end = t if on else float(self._grip_off[k])
+            u_in = min(max((end - float(self._grip_lift[k])) / LOAD_RAMP, 0.0), 1.0)
+            weight = u_in * u_in * (3.0 - 2.0 * u_in)
             if not on:
                 u = (t - float(self._grip_off[k])) / self._pair_blend
                 if u >= 1.0:
                     self._grip_dz[k] = 0.0
                     continue
-                weight = 1.0 - u * u * (3.0 - 2.0 * u)
+                weight *= 1.0 - u * u * (3.0 - 2.0 * u)
             if out is targets:
                 out = np.array(targets, dtype=float, copy=True)
             out[k, 2] += weight * dz
