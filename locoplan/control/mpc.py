@@ -444,10 +444,13 @@ class MultiContactMpc:
         r = np.arange(P)
         S[r, off + sup.pairs[:, 0]] = 1.0
         S[r, off + sup.pairs[:, 1]] = 1.0
-        C = np.vstack([qp.C, S]) if isinstance(qp.C, np.ndarray) else sp.vstack([qp.C, S])
+        if isinstance(qp.C, np.ndarray):
+            C = np.vstack([qp.C, S])
+        else:
+            C = sp.vstack([qp.C, S], format="csc")
         return replace(
             qp,
-            C=C if isinstance(C, np.ndarray) else sp.csc_matrix(C),
+            C=C,
             l=np.concatenate([qp.l, np.full(P, sup.need)]),
             u=np.concatenate([qp.u, np.full(P, np.inf)]),
             x_lower=x_lower,
@@ -767,9 +770,10 @@ class MultiContactMpc:
         m_old, n_old = self._prev_n_in, n_fs_old * 5
         upper = ids >= m_old + n_old
         j = np.where(upper, ids - (m_old + n_old), ids)
-        # The summed force's rows (after the wrench rows) are not carried over.
-        summed = (j >= n_fs_old * R) & (j < m_old)
-        ids, upper, j = ids[~summed], upper[~summed], j[~summed]
+        if m_old > n_fs_old * R:
+            # The summed force's rows (after the wrench rows) are not carried over.
+            summed = (j >= n_fs_old * R) & (j < m_old)
+            ids, upper, j = ids[~summed], upper[~summed], j[~summed]
         is_row = j < m_old
         fs_old = np.where(is_row, j // R, (j - m_old) // 5)
         within = np.where(is_row, j % R, (j - m_old) % 5)
