@@ -77,12 +77,14 @@ def net_moment_about_com(inp: MpcInput, U0: np.ndarray) -> np.ndarray:
     return total
 
 
-def rollout_with(inp: MpcInput, U: np.ndarray) -> np.ndarray:
-    """x_1..x_N by srbd.rollout with the returned U (the reference model, one step at a time)."""
+def rollout_with(inp: MpcInput, U: np.ndarray, levers: np.ndarray | None = None) -> np.ndarray:
+    """x_1..x_N by srbd.rollout with the returned U (the reference model, one step at a time);
+    step k >= 1's lever arms from ``levers[k - 1]`` (N, 3) if given, else from x_ref[k - 1]."""
     models = []
     u = np.zeros((N, 10))
+    lev = inp.x_ref[:, srbd.POS] if levers is None else levers
     for k in range(N):
-        p_c = inp.x0[srbd.POS] if k == 0 else inp.x_ref[k - 1, srbd.POS]
+        p_c = inp.x0[srbd.POS] if k == 0 else lev[k - 1]
         cm = srbd.continuous_model(
             float(inp.yaw_lin[k]),
             p_c,
@@ -383,3 +385,55 @@ def test_support_fraction_with_warm_starts_and_the_relaxed_retry() -> None:
     assert not sol.ok and sol.fallback == "relaxed"
     with pytest.raises(ValueError):
         MpcSettings(support_fraction=1.5)
+
+
+def _ahead(t: float, x_ahead: float = 0.04) -> MpcInput:
+    """Standing with 3 kg held, the CoM ``x_ahead`` in front of its reference (after a pick)."""
+    inp = make_input(object_mass=3.0, p_object=(0.25, 0.0, 0.6))
+    x0 = inp.x0.copy()
+    x0[3] += x_ahead
+    return replace(inp, x0=x0, t=t)
+
+
+def test_predicted_levers_are_the_previous_prediction() -> None:
+    # One whole step later, step k's lever arm is the previous prediction's CoM x_k exactly
+    # (row k - 1 of levers is X_prev[k]); the last row is past the previous horizon.
+    mpc = MultiContactMpc(MpcSettings(qp=TIGHT, levers="predicted"))
+    first = mpc.update(_ahead(0.0))
+    inp = _ahead(0.03)
+    second = mpc.update(inp)
+    levers = np.vstack([first.X[1:, srbd.POS], inp.x_ref[-1:, srbd.POS]])
+    X = rollout_with(inp, second.U, levers)
+    # 1e-9: the ZOH discretisations of srbd (expm) and of the kernels (closed form) agree to
+    # rounding; states are O(1) m and rad.
+    assert np.abs(second.X[:, :12] - X[:, :12]).max() < 1e-9
+    # The reference levers are a different problem: the same U rolls out elsewhere.
+    assert np.abs(rollout_with(inp, second.U)[:, :12] - X[:, :12]).max() > 1e-6
+    # A third of a step later the levers are interpolated between the prediction's steps.
+    path = mpc._lever_path(_ahead(0.04))
+    assert path is not None
+    want = (2.0 / 3.0) * second.X[0, srbd.POS] + (1.0 / 3.0) * second.X[1, srbd.POS]
+    assert np.allclose(path[0], want, atol=1e-12)
+    # The reference levers ignore the prediction.
+    assert MultiContactMpc(MpcSettings(levers="reference"))._lever_path(inp) is None
+    with pytest.raises(ValueError):
+        MpcSettings(levers="measured")
+
+
+def test_predicted_levers_keep_the_support_steady_with_the_com_ahead() -> None:
+    # With the CoM 4 cm ahead of its reference, step 0's lever arm (measured CoM) and step
+    # 1's (reference) differ by 4 cm: the QP takes weight off the feet now and puts it on the
+    # next step (what sank the trunk after heavy picks in the envelope, mpc._lever_path).
+    # Levers from the previous prediction converge, update by update, to a steady support.
+    weight = (MASS + 3.0) * G
+    jumps = {}
+    for levers in ("reference", "predicted"):
+        mpc = MultiContactMpc(MpcSettings(qp=TIGHT, levers=levers))
+        for i in range(8):
+            sol = mpc.update(_ahead(0.01 * i))
+            assert sol.ok and sol.fallback == "none"
+        fz = sol.U[:, :, 2].sum(axis=1)
+        jumps[levers] = abs(fz[1] - fz[0]) / weight
+    # Measured 0.18 (reference) and 0.037 (predicted) of the weight.
+    assert jumps["reference"] > 0.12
+    assert jumps["predicted"] < 0.08

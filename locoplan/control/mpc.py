@@ -81,6 +81,7 @@ BoolArray = npt.NDArray[np.bool_]
 
 MODELS: Final[tuple[str, ...]] = ("external-force", "combined")
 FORMULATIONS: Final[tuple[str, ...]] = ("condensed", "sparse")
+LEVERS: Final[tuple[str, ...]] = ("reference", "predicted")
 FALLBACKS: Final[tuple[str, ...]] = ("none", "relaxed", "shifted")
 
 _DEFAULT_Q: Final = (
@@ -184,6 +185,9 @@ class MpcSettings:
     # The stance feet's vertical forces at every step sum to at least this fraction of the
     # weight m g (`MultiContactMpc._support`); 0: only f_min per foot.
     support_fraction: float = 0.0
+    # Where step k >= 1's lever arms come from: "reference" (x_ref[k-1]'s CoM) or
+    # "predicted" (the previous update's predicted CoM at that time; `_lever_path`).
+    levers: str = "reference"
 
     def __post_init__(self) -> None:
         if not self.dt > 0:
@@ -198,6 +202,8 @@ class MpcSettings:
             raise ValueError("MpcSettings: mu, toe and heel must be >= 0")
         if not 0.0 <= self.support_fraction <= 1.0:
             raise ValueError("MpcSettings.support_fraction must be in [0, 1]")
+        if self.levers not in LEVERS:
+            raise ValueError(f"MpcSettings.levers must be one of {LEVERS}, got {self.levers!r}")
         if self.mu_torsion is not None and self.mu_torsion < 0:
             raise ValueError("MpcSettings.mu_torsion must be >= 0")
         if self.ankle_row is not None and not (len(self.ankle_row) == 5 and self.ankle_torque > 0):
@@ -365,6 +371,8 @@ class MultiContactMpc:
         self._prev_fs: npt.NDArray[np.intp] | None = None
         # Constraint rows of the previous QP (the wrench rows, then the summed force's).
         self._prev_n_in = 0
+        # The previous update's predicted CoM x_1..x_N (N, 3) (`_lever_path`).
+        self._prev_com: FloatArray | None = None
 
     # --- caches ----------------------------------------------------------------------------
 
@@ -567,7 +575,7 @@ class MultiContactMpc:
         t0 = time.perf_counter()
         Ib = np.ascontiguousarray(inp.inertia_body, dtype=np.float64)
         kern = self._get_kernel(np.ascontiguousarray(inp.yaw_lin, dtype=np.float64), Ib)
-        st = step_terms(inp, s.dt, kern.Iinv, Ib)
+        st = step_terms(inp, s.dt, kern.Iinv, Ib, self._lever_path(inp))
         x_free = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, st.tau_ext, st.f_ext, s.dt)
         N = s.horizon
         nu = st.cols.shape[0]
@@ -633,6 +641,7 @@ class MultiContactMpc:
             fallback = "shifted"
         U, X = self._finish(inp, st, kern, U_foot3)
         self._prev_U, self._prev_contact, self._prev_t = U_foot3, inp.contact.copy(), inp.t
+        self._prev_com = X[:, 3:6].copy()
         if used.ok and warm:
             self._prev_active = active_constraint_ids(used)
             self._prev_fs = st.cols[::5] // 5
@@ -670,7 +679,7 @@ class MultiContactMpc:
         s = self.settings
         Ib = np.ascontiguousarray(inp.inertia_body, dtype=np.float64)
         kern = self._get_kernel(np.ascontiguousarray(inp.yaw_lin, dtype=np.float64), Ib)
-        st = step_terms(inp, s.dt, kern.Iinv, Ib)
+        st = step_terms(inp, s.dt, kern.Iinv, Ib, self._lever_path(inp))
         x_free = propagate(inp.x0, kern.RzT, st.Iinv, st.mass, st.tau_ext, st.f_ext, s.dt)
         sup = self._support(st.cols, inp.mass, s.f_min)
         return self._problem(inp, st, kern, x_free, s.f_min, s.f_max, sup)[0]
@@ -752,6 +761,36 @@ class MultiContactMpc:
             return built[0]
 
         return LeastDistanceForm(x_u=x_u, factors=factors, box=box)
+
+    def _lever_path(self, inp: MpcInput) -> FloatArray | None:
+        """The CoM (N, 3) that steps 1..N's lever arms are taken from with ``levers`` =
+        "predicted", else None (the reference's, `step_terms`).
+
+        Row k - 1 is the previous update's predicted CoM at this update's step k (time
+        t + k dt), linearly interpolated between its steps; past its horizon its last
+        deviation from this reference is kept. The lever arm r x f makes the SRBD bilinear;
+        the paper linearises it about the reference. After a heavy pick the CoM runs 5-6 cm
+        ahead of its reference, step 0 (measured CoM) and step 1 (reference) then see levers
+        that differ by that much, and the QP trades an unloaded foot now for a double load at
+        the next step, every update, so the trunk sinks (46021 walk-carry-005). Taking the
+        levers from the path the previous solve predicted removes the jump between steps 0
+        and 1 and converges, update by update, to levers consistent with the forces (a
+        real-time iteration: one QP per update, as before).
+        """
+        if self.settings.levers != "predicted" or self._prev_com is None:
+            return None
+        N, dt = self.settings.horizon, self.settings.dt
+        # Previous row j is at t_prev + (j + 1) dt; step k >= 1 at t + k dt.
+        j = (inp.t - self._prev_t) / dt + np.arange(1, N + 1) - 1.0
+        prev = self._prev_com
+        j0 = np.clip(np.floor(j).astype(np.intp), 0, N - 1)
+        j1 = np.minimum(j0 + 1, N - 1)
+        a = np.clip(j - j0, 0.0, 1.0)[:, None]
+        path = (1.0 - a) * prev[j0] + a * prev[j1]
+        late = j > N - 1
+        if bool(np.any(late)):
+            path[late] = inp.x_ref[late, 3:6] + (prev[N - 1] - inp.x_ref[N - 1, 3:6])
+        return np.ascontiguousarray(path)
 
     def _shift(self, inp: MpcInput) -> int:
         """Whole MPC steps elapsed since the previous update (from ``MpcInput.t``)."""

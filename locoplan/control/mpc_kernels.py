@@ -160,7 +160,7 @@ def _inv3(A: FloatArray, out: FloatArray) -> None:
 def step_terms(
     dt: float,
     x0: FloatArray,
-    x_ref: FloatArray,
+    p_lever: FloatArray,
     contact: BoolArray,
     p_feet: FloatArray,
     foot_yaw: FloatArray,
@@ -186,7 +186,8 @@ def step_terms(
 ]:
     """Per-step terms of one problem (see `mpc_terms.StepTerms`).
 
-    ``object_held`` (N,) and ``object_mass`` (N,) (kg): an object of that mass is held at
+    ``p_lever`` (N, 3) the CoM (world, m) step k + 1's lever arms are taken from (step 0's
+    from x0). ``object_held`` (N,) and ``object_mass`` (N,) (kg): an object of that mass is held at
     step k (it counts where both are set), ``p_object`` (N, 3) its CoM (world, m),
     ``a_object`` (N, 3) its planned acceleration (world, m/s^2; Model 2 only),
     ``Iinv_body`` (N, 3, 3) R_z I_body^-1 R_z' (`yaw_terms`).
@@ -195,7 +196,7 @@ def step_terms(
     tau_ext and f_ext (N, 3) (zero without a held object), Tw (N, 2, 3, 5), cos_foot and
     sin_foot (N, 2), Phi (N, 6, 10) and cols (n,) of `mpc_terms.StepTerms`.
     """
-    N = x_ref.shape[0]
+    N = p_lever.shape[0]
     Iinv = np.empty((N, 3, 3))
     mass_k = np.empty(N)
     tau_ext = np.zeros((N, 3))
@@ -213,11 +214,11 @@ def step_terms(
             if contact[k, f]:
                 n_st += 1
     for k in range(N):
-        # p_com: x0's CoM for step 0, x_ref[k - 1]'s after.
+        # p_com: x0's CoM for step 0, p_lever[k - 1] after.
         if k == 0:
             pc0, pc1, pc2 = x0[3], x0[4], x0[5]
         else:
-            pc0, pc1, pc2 = x_ref[k - 1, 3], x_ref[k - 1, 4], x_ref[k - 1, 5]
+            pc0, pc1, pc2 = p_lever[k - 1, 0], p_lever[k - 1, 1], p_lever[k - 1, 2]
         m_o = object_mass[k] if object_held[k] else 0.0
         lever[0], lever[1], lever[2] = pc0, pc1, pc2
         mass_k[k] = mass
@@ -728,7 +729,7 @@ def warm_up() -> None:
     Iinv_k, mass, tau, force, Tw, c, s, Phi, cols = step_terms(
         dt,
         x0,
-        x_ref,
+        np.ascontiguousarray(x_ref[:, 3:6]),
         np.ones((N, 2), dtype=np.bool_),
         p_feet,
         np.zeros((N, 2)),

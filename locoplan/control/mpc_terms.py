@@ -107,11 +107,17 @@ class StepTerms:
     cols: npt.NDArray[np.intp]
 
 
-def step_terms(inp: MpcInput, dt: float, Iinv_model2: FloatArray, Ib: FloatArray) -> StepTerms:
+def step_terms(
+    inp: MpcInput,
+    dt: float,
+    Iinv_model2: FloatArray,
+    Ib: FloatArray,
+    lever_path: FloatArray | None = None,
+) -> StepTerms:
     """Per-step terms; ``Iinv_model2`` (N, 3, 3) is R_z I_body^-1 R_z^T at yaw_lin (cached).
 
     The lever arms of step k are taken from the CoM at step k (x0's for k = 0, x_ref[k-1]'s
-    after); with a held object the combined model (Model 1) takes the joint CoM, mass and
+    after, or ``lever_path[k-1]``'s (N, 3) when given); with a held object the combined model (Model 1) takes the joint CoM, mass and
     inertia instead, the external-force model (Model 2) the object's weight as a known
     wrench.
     """
@@ -127,7 +133,7 @@ def step_terms(inp: MpcInput, dt: float, Iinv_model2: FloatArray, Ib: FloatArray
     Iinv, mass, tau_ext, f_ext, Tw, c, s, Phi, cols = mpc_kernels.step_terms(
         float(dt),
         _f64(inp.x0),
-        _f64(inp.x_ref),
+        _f64(inp.x_ref[:, 3:6] if lever_path is None else lever_path),
         np.ascontiguousarray(inp.contact, dtype=np.bool_),
         _f64(inp.p_feet),
         _f64(inp.foot_yaw),
