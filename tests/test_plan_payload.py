@@ -19,8 +19,8 @@ from locoplan.batch.job import Job
 from locoplan.batch.worker import execute_job
 from locoplan.cli import app
 from locoplan.envelope import FAMILIES, generate_suite
-from locoplan.plan import PlanError, compile_plan
-from locoplan.plan.compiler import HURRIED_TURN_RATE
+from locoplan.plan import Plan, PlanError, compile_plan
+from locoplan.plan.compiler import HURRIED_LOADED_TURN_RATE, HURRIED_TURN_RATE
 from locoplan.plan.payload import (
     LEAN_RATIO_HIGH,
     LEAN_RATIO_LOW,
@@ -309,6 +309,90 @@ def test_a_hurried_turn_picks_and_places_in_mujoco(tmp_path: Path) -> None:
     assert "planner: the turn by 145 deg from 0.00 s ends at " in result.output
     metrics = json.loads(metrics_path.read_text())
     assert len(metrics["planner_notes"]) == 1
+    assert not metrics["fell"] and metrics["peak_torque_ratio"] <= 1.0
+    assert metrics["objects"]["parcel"]["on"] == "platform"
+    assert not metrics["objects"]["parcel"]["held"]
+
+
+# A transfer whose drop (start %s s) releases the parcel long before its 171 deg turn ends
+# (envelope seed 48021, transfer-010: refused before `_face_the_drop`).
+TURNING_DROP = """version: 1
+name: turning-drop
+gait: {period: 0.37, swing: 0.18}
+objects:
+  parcel: {shape: box, size: [0.142, 0.218, 0.224], mass: 0.52,
+           position: [0.085, 0.313, 0.618], yaw: 74.8}
+fixtures:
+  table: {kind: table, position: [0.117, 0.431, 0.0], size: [0.328, 0.384, 0.506], yaw: 74.8}
+  platform: {kind: platform, position: [-0.037, -0.326, 0.0], size: [0.312, 0.424, 0.489],
+             yaw: -96.5}
+tasks:
+  - {action: turn, angle: 74.8, start: 0.0, duration: 1.64}
+  - {action: pick, object: parcel, start: 0.82, duration: 1.05}
+  - {action: turn, angle: -171.3, start: 1.87, duration: 4.65}
+  - {action: drop, object: parcel, onto: platform, start: %s, duration: 1.19}
+end: 7.52
+"""
+
+
+def _lowering_start(plan: Plan, task_index: int) -> float:
+    return min(
+        g.t0
+        for track in plan.manipulation.tracks
+        for g in track.segments
+        if g.task_index == task_index and g.label == "lower"
+    )
+
+
+def test_a_drop_early_in_a_long_turn_hurries_the_turn_to_face_the_target() -> None:
+    """A drop in the second half of the turn (inside issue 12's envelope) whose release
+    comes before the trunk faces the platform: the planner ends the turn sooner, no quicker
+    than a loaded turn may go, instead of refusing the script, and says so."""
+    scenario = scenario_from_text(TURNING_DROP % "4.28")
+    plan = compile_plan(scenario)
+    turn = plan.tasks[2]
+    assert turn.action == "turn" and turn.start == 1.87
+    # Sooner than written (6.52 s), no quicker than HURRIED_LOADED_TURN_RATE.
+    assert math.radians(171.3) / HURRIED_LOADED_TURN_RATE - 0.01 <= turn.duration
+    assert turn.end < 6.52
+    # It ends about when the hands start lowering the parcel onto the platform (the plan
+    # that the written turn gave: the drop's phases are re-timed for the hurried one), well
+    # before the release.
+    assert abs(turn.end - _lowering_start(plan, 3)) < 0.1
+    assert turn.end < plan.holds[0].release
+    assert plan.notes == (
+        f"the turn by 171 deg from 1.87 s ends at {turn.end:.2f} s instead of 6.52 s so that "
+        "the trunk faces 'platform' at the release",
+    )
+    # The other tasks keep their written times.
+    assert [(t.start, t.end) for i, t in enumerate(plan.tasks) if i != 2] == [
+        (t.start, t.start + t.duration) for i, t in enumerate(scenario.tasks) if i != 2
+    ]
+
+
+def test_a_drop_too_early_for_the_quickest_turn_is_still_refused() -> None:
+    # Released at 3.45 s: even at 65 deg/s the turn faces the platform only at 4.51 s.
+    with pytest.raises(PlanError) as info:
+        compile_plan(scenario_from_text(TURNING_DROP % "2.50"))
+    exc = info.value
+    assert exc.loc == ("tasks", 3) and exc.task_index == 3
+    assert exc.message.startswith("infeasible (reach): at the release of 'parcel' onto ")
+    assert "put the target nearer the robot or walk up to it before the drop" in exc.message
+
+
+@pytest.mark.closed_loop
+def test_a_hurried_turn_places_on_the_target_in_mujoco(tmp_path: Path) -> None:
+    """Closed loop: the script that the planner used to refuse runs, and the parcel ends on
+    the platform with the robot standing (MuJoCo's state, as the run's metrics report it)."""
+    path = _write(tmp_path, TURNING_DROP % "4.28", "drop.yaml")
+    metrics_path = tmp_path / "metrics.json"
+    result = runner.invoke(
+        app,
+        ["run", str(path), "--out", str(tmp_path / "runs"), "--metrics-json", str(metrics_path)],
+    )
+    assert result.exit_code == 0, result.output
+    metrics = json.loads(metrics_path.read_text())
+    assert metrics["planner_notes"][0].endswith("so that the trunk faces 'platform' at the release")
     assert not metrics["fell"] and metrics["peak_torque_ratio"] <= 1.0
     assert metrics["objects"]["parcel"]["on"] == "platform"
     assert not metrics["objects"]["parcel"]["held"]

@@ -96,7 +96,11 @@ def compile_plan(
         check_grasp_reach(plan, scenario.robot)
     except InfeasiblePlanError as exc:
         plan = _face_the_pick(scenario, tasks, plan, exc, build, geometry)
-    check_place_reach(plan, scenario.robot, scenario.fixtures)
+    try:
+        check_place_reach(plan, scenario.robot, scenario.fixtures)
+    except InfeasiblePlanError as exc:
+        # The notes of this plan beyond the heavy lifts' (a hurried pick's) stay.
+        plan = _face_the_drop(scenario, plan, plan.notes[len(base_notes) :], exc, build, geometry)
     check_payload(plan, scenario.robot)
     return with_lean_weights(plan, scenario.robot)
 
@@ -235,9 +239,6 @@ def _face_the_pick(
     if shortest >= turn.duration:
         raise exc
 
-    def retimed(duration: float) -> tuple[PlannedTask, ...]:
-        return tuple(replace(t, end=t.start + duration) if t is turn else t for t in tasks)
-
     grasp = planned_grasp(plan, pick.index, scenario.robot)
     # A lift-off after the written turn's end already faces the object: the grip points are
     # too far, which no turn mends.
@@ -247,6 +248,34 @@ def _face_the_pick(
     # moves later with it may need the turn a little shorter still (a few tries, each a full
     # plan: the hand paths cost up to seconds per pick).
     first = max(shortest, ceil_time(grasp[0] - turn.start))
+
+    def check(hurried: Plan) -> None:
+        check_grasp_reach(hurried, scenario.robot)
+
+    return _hurry_turn(
+        tasks, (), turn, first, shortest, build, f"'{pick.object}' at its lift-off", check, exc
+    )
+
+
+def _hurry_turn(
+    tasks: tuple[PlannedTask, ...],
+    notes: tuple[str, ...],
+    turn: PlannedTask,
+    first: float,
+    shortest: float,
+    build: Callable[[tuple[PlannedTask, ...], tuple[str, ...]], Plan],
+    what: str,
+    check: Callable[[Plan], None],
+    exc: InfeasiblePlanError,
+) -> Plan:
+    """The first plan, with `turn` (of `tasks`) lasting `first` s, then HURRY_STEP and twice
+    that less, then `shortest` s (each rounded up to 0.01 s, none under `shortest`), that
+    `check` accepts; it raises `exc` (the refusal that asked for the hurry) when none does.
+    A refusal of another task than `exc`'s by `check` propagates. The plan's notes are
+    `notes` and one saying which turn ends sooner "so that the trunk faces `what`"."""
+    from locoplan.scenario.feasibility import ceil_time
+
+    amount = abs(turn.angle or 0.0)
     tries: list[float] = []
     for d in (first, first - HURRY_STEP, first - 2.0 * HURRY_STEP, shortest):
         d = max(shortest, ceil_time(d))
@@ -256,17 +285,78 @@ def _face_the_pick(
         note = (
             f"the turn by {math.degrees(amount):.0f} deg from {turn.start:.2f} s ends at "
             f"{turn.start + duration:.2f} s instead of {turn.end:.2f} s so that the trunk faces "
-            f"'{pick.object}' at its lift-off"
+            f"{what}"
         )
-        hurried = build(retimed(duration), (note,))
+        retimed = tuple(replace(t, end=t.start + duration) if t is turn else t for t in tasks)
+        hurried = build(retimed, (*notes, note))
         try:
-            check_grasp_reach(hurried, scenario.robot)
+            check(hurried)
         except InfeasiblePlanError as again:
-            if again.task_index != pick.index:
+            if again.task_index != exc.task_index:
                 raise
             continue
         return hurried
     raise exc
+
+
+def _face_the_drop(
+    scenario: Scenario,
+    plan: Plan,
+    notes: tuple[str, ...],
+    exc: InfeasiblePlanError,
+    build: Callable[[tuple[PlannedTask, ...], tuple[str, ...]], Plan],
+    geometry: PlanGeometry,
+) -> Plan:
+    """The plan with the turn that a drop starts in hurried, when the trunk would not face
+    the target at the release as written and `check_place_reach` refused it (`exc`): the
+    counterpart of `_face_the_pick` for the second turn of a transfer.
+
+    A script may start a drop anywhere in the second half of a turn (issue 12's envelope),
+    and the drop's release may come well before the turn ends: -171 deg in 4.65 s with the
+    drop at 4.28-5.47 s leaves the trunk 30 deg short of the platform at its release, the
+    place points 11 cm beyond the arms (envelope seed 48021, transfer-010, refused). The turn
+    keeps its start and angle and ends when the hands start lowering the object onto the
+    target (the "lower" segment, `manipulation._Builder.drop`), so the trunk faces the target
+    while the object goes down, or sooner by HURRY_STEP; no quicker than
+    HURRIED_LOADED_TURN_RATE on average (the object is held through the turn) nor than the
+    hip yaw range allows at the gait's period. The robot stands facing the target until the
+    turn's written end. Raises `exc` when the quickest such turn does not reach the place
+    points, or the drop does not start inside a turn. `notes`: the plan's notes that `build`
+    does not add itself."""
+    from locoplan.scenario.feasibility import ceil_time, turn_rate_limit
+
+    tasks = plan.tasks
+    drop = next((t for t in tasks if t.index == exc.task_index and t.action == "drop"), None)
+    if drop is None:
+        raise exc
+    turn = next((t for t in tasks if t.action == "turn" and t.start <= drop.start < t.end), None)
+    if turn is None or turn.angle is None:
+        raise exc
+    lowering = min(
+        (
+            g.t0
+            for track in plan.manipulation.tracks
+            for g in track.segments
+            if g.task_index == drop.index and g.label == "lower"
+        ),
+        default=None,
+    )
+    if lowering is None or lowering >= turn.end - HURRY_STEP:
+        raise exc
+    limit = turn_rate_limit(scenario.gait.period, geometry.hip_yaw_range)
+    rate = min(HURRIED_LOADED_TURN_RATE, limit * (1.0 - CRUISE_RAMP))
+    shortest = ceil_time(abs(turn.angle) / rate)
+    if shortest >= turn.duration:
+        raise exc
+    first = max(shortest, ceil_time(lowering - turn.start))
+
+    def check(hurried: Plan) -> None:
+        check_grasp_reach(hurried, scenario.robot)
+        check_place_reach(hurried, scenario.robot, scenario.fixtures)
+
+    return _hurry_turn(
+        tasks, notes, turn, first, shortest, build, f"'{drop.onto}' at the release", check, exc
+    )
 
 
 # The quickest loaded walk (average speed, m/s) that `_wait_for_heavy_lifts` plans: issue
