@@ -776,6 +776,19 @@ class MultiContactMpc:
         levers from the path the previous solve predicted removes the jump between steps 0
         and 1 and converges, update by update, to levers consistent with the forces (a
         real-time iteration: one QP per update, as before).
+
+        Off by default (measured, not kept): the jump is a phantom pitch torque (a vertical
+        force moved from step k to k + 1, whose levers differ by the CoM's error e, gives
+        F e of pitch moment without any centre of pressure), and heavy standing holds lean on
+        it. On 48 failing or heavy scripts of seeds 46021 and 48021 this fixed 10 of 20
+        failures, but 7 of 10 standing holds of 9-14 kg fell 1-2 s after the pick: with
+        consistent levers the QP sees that the CoM ahead of its (load-shifted) reference and
+        the load ahead need more pitch moment than the toes give, trades position for
+        pitch with a forward push, and the predicted path runs forward (so did a trust
+        region keeping the levers within today's error). Taking only step 1's lever from
+        the prediction moved the force pulse to steps 1 and 2 (f_min, f_min, 500 N) and
+        lost standing holds in the envelope (seeds 46021, 49021). Levers from the
+        reference at step 0 too lost them as well.
         """
         if self.settings.levers != "predicted" or self._prev_com is None:
             return None
