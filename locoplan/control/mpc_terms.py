@@ -117,9 +117,9 @@ def step_terms(
     """Per-step terms; ``Iinv_model2`` (N, 3, 3) is R_z I_body^-1 R_z^T at yaw_lin (cached).
 
     The lever arms of step k are taken from the CoM at step k (x0's for k = 0, x_ref[k-1]'s
-    after, or ``lever_path[k-1]``'s (N, 3) when given); with a held object the combined model (Model 1) takes the joint CoM, mass and
-    inertia instead, the external-force model (Model 2) the object's weight as a known
-    wrench.
+    after, or ``lever_path[k-1]``'s (N, 3) when given); with a held object the combined
+    model (Model 1) takes the joint CoM, mass and inertia instead, the external-force model
+    (Model 2) the object's weight as a known wrench.
     """
     N = inp.horizon
     m_o = inp.object_mass
