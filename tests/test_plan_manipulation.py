@@ -11,7 +11,6 @@ from plan_fixtures import hold_script, repo_scenario, scenario_from_text
 from locoplan.plan import Plan, PlanError, compile_plan
 from locoplan.plan import constants as k
 from locoplan.plan.clearance import fixture_obstacle, track_clearance
-from locoplan.plan.compiler import HURRIED_LOADED_TURN_RATE
 from locoplan.plan.geometry import ballistic_landing, support_half_width
 from locoplan.plan.hand_paths import carry_in, grip_height, pull_accel, settle_in
 from locoplan.scenario.model import ObjectSpec
@@ -366,11 +365,10 @@ def test_the_pull_in_is_gentle_unless_a_heavy_object_must_be_in_before_the_first
     to `carry_in`. At 2 kg (m_o g d = 6.5 N m, under PULL_FAST_SHARE of the 33.5 N m leg
     joints) the raise pulls it no faster than `pull_accel` and the "carry" move, up and in
     at once at that acceleration (past the pick's end), does the rest; at 7 kg (22.7 N m) it
-    must be in before the first step of the turn (0.1 s after the pick as written, 0.31 s
-    once the turn waits as long as 65 deg/s allows), which `pull_accel` does not allow: the
-    raise and the carry move share the pull at the gentlest acceleration that ends it by
-    that step, gentler than the whole pull in the raise alone (the old rule, 40-60 N on the
-    hands) and no gentler than `pull_accel`."""
+    must be in before the first step of the turn (0.1 s after the pick), which `pull_accel`
+    does not allow: the raise and the carry move share the pull at the gentlest acceleration
+    that ends it by that step, gentler than the whole pull in the raise alone (the old rule,
+    40-60 N on the hands) and no gentler than `pull_accel`."""
     plan = compile_plan(scenario_from_text(WALK_CARRY.replace("MASS", str(mass))))
     pick = next(t for t in plan.tasks if t.action == "pick")
     segments = plan.manipulation.tracks[0].segments
@@ -485,12 +483,10 @@ def test_a_turn_waits_for_the_end_of_a_heavy_pick_when_the_rate_allows(
     mass: float, duration: float, waits: bool
 ) -> None:
     """7 kg 0.33 m ahead is heavy (m g d = 22.7 N m, over PULL_FAST_SHARE of the 33.5 N m
-    leg joints): the turn written from 1.4 s starts after the pick's end, 1.5 s, as late as
-    HURRIED_LOADED_TURN_RATE allows (90 deg at 65 deg/s: from 1.81 s; the gentlest pull-in
-    would take until about 2.4 s), ends when written, and the plan says so; its first step
-    comes after the pick. A 2 kg box does not wait (the dynamic strategy overlaps the tasks
-    as written), nor does a turn that would then be quicker than HURRIED_LOADED_TURN_RATE
-    on average (90 deg in 0.8 s)."""
+    leg joints): the turn written from 1.4 s starts at the pick's end, 1.5 s, ends when
+    written, and the plan says so; its first step comes after the pick. A 2 kg box does not
+    wait (the dynamic strategy overlaps the tasks as written), nor does a turn that would
+    then be quicker than HURRIED_LOADED_TURN_RATE on average (90 deg in 0.8 s)."""
     text = OVERLAPPED_PICK.replace("MASS", str(mass)).replace("DUR", str(duration))
     text = text.replace("start: 3.2, duration: 2.4", "start: 3.4, duration: 2.2")
     plan = compile_plan(scenario_from_text(text))
@@ -498,50 +494,10 @@ def test_a_turn_waits_for_the_end_of_a_heavy_pick_when_the_rate_allows(
     assert turn.end == pytest.approx(1.4 + duration)
     first_swing = min(a for f in range(2) for a, _ in plan.swing_intervals(f))
     if waits:
-        (hold,) = plan.holds
-        assert pick.end < turn.start < hold.gentle_pull_end
-        # 0.01 s: the start is rounded down to what a script writes.
-        assert math.radians(90.0) / (turn.end - turn.start + 0.01) < HURRIED_LOADED_TURN_RATE
-        assert math.radians(90.0) / turn.duration <= HURRIED_LOADED_TURN_RATE + 1e-9
+        assert turn.start == pytest.approx(pick.end)
         assert first_swing >= pick.end - 1e-9
-        assert any(f"starts at {turn.start:.2f} s" in n and "'box'" in n for n in plan.notes)
+        assert any("starts at 1.50 s" in n and "'box'" in n for n in plan.notes)
     else:
         assert turn.start == pytest.approx(1.4)
         assert first_swing < pick.end
         assert not plan.notes
-
-
-def test_a_turn_after_a_heavy_pick_waits_for_its_gentlest_pull_in() -> None:
-    """The turn written to start 0.1 s after the pick of a 7 kg box (heavy, above) has the
-    time to wait: it starts when the gentlest pull-in (`pull_accel`, the arms' reaction on
-    the trunk held to HAND_ACCEL_LIMIT's force) is done, keeps its end, and the raise and
-    the carry move then pull no faster than `pull_accel`. Before, the pull had to end by the
-    turn's first step: seed 49021's transfer-003 (5.96 kg) pulled its box 15 cm in within
-    0.3 s, the reaction ran the trunk forward at 0.27 m/s and the robot fell in the turn;
-    the same script with its turn started later placed the box."""
-    text = WALK_CARRY.replace("MASS", "7.0").replace(
-        "start: 1.6, duration: 1.6", "start: 1.6, duration: 2.4"
-    )
-    text = text.replace("start: 3.2, duration: 2.4", "start: 4.0, duration: 2.4")
-    text = text.replace("start: 5.6, duration: 1.0", "start: 6.4, duration: 1.0")
-    text = text.replace("end: 7.0", "end: 7.8")
-    plan = compile_plan(scenario_from_text(text))
-    (hold,) = plan.holds
-    turn = plan.tasks[1]
-    assert math.isfinite(hold.gentle_pull_end) and hold.gentle_pull_end > 1.6
-    assert turn.start == pytest.approx(math.ceil(hold.gentle_pull_end * 100.0 - 1e-6) / 100.0)
-    assert turn.end == pytest.approx(4.0)
-    segments = plan.manipulation.tracks[0].segments
-    for label in ("raise", "carry"):
-        g = next(g for g in segments if g.label == label)
-        dt = 1e-3
-        times = np.round(np.arange(g.t0, g.t1 + dt / 2, dt), 6)
-        # The horizontal pull (the raise lifts the box off its table faster, vertically).
-        p = plan.object_positions(times)[:, :2]
-        acc = np.linalg.norm(np.diff(p, 2, axis=0), axis=1) / dt**2
-        # 2 %: finite differences on a 1 ms grid (as in the carry move's test above).
-        assert acc.max() <= 1.02 * pull_accel(7.0), label
-    carry = next(g for g in segments if g.label == "carry")
-    first_swing = min(a for f in range(2) for a, _ in plan.swing_intervals(f))
-    assert carry.t1 <= first_swing + 1e-9
-    assert any("pulls it in" in n for n in plan.notes)

@@ -395,7 +395,7 @@ def _wait_for_heavy_lifts(
     14 against 12). With the old fast pull (the whole pull in the raise) it was -2 on the
     seeds it was not found on, and it was not kept then."""
     from locoplan.plan.hand_paths import heavy_pull, world_to_trunk
-    from locoplan.plan.profiles import least_duration
+    from locoplan.plan.profiles import peak_rate
     from locoplan.scenario.feasibility import ceil_time, turn_rate_limit, walk_speed_limit
 
     if not plan.holds:
@@ -421,31 +421,35 @@ def _wait_for_heavy_lifts(
         ahead = world_to_trunk(plan.trunk, raise_.t1, raise_.start.point)[0]
         if not heavy_pull(hold.mass, ahead, leg):
             continue
-        # Stand until the pick ends and its gentlest pull-in is done.
-        until = max(pick.end, hold.gentle_pull_end)
         loco = next(
-            (t for t in tasks if t.kind == "locomotion" and pick.start <= t.start < until - 1e-9),
+            (
+                t
+                for t in tasks
+                if t.kind == "locomotion" and pick.start <= t.start < pick.end - 1e-9
+            ),
             None,
         )
-        if loco is None or not any(a < until and b > raise_.t0 for a, b in swings):
+        if loco is None or not any(a < pick.end and b > raise_.t0 for a, b in swings):
+            continue
+        start = ceil_time(pick.end)
+        duration = loco.end - start
+        if duration <= 0.0:
             continue
         amount = abs(loco.angle or 0.0)  # rad
         dist = math.hypot(*loco.distance) if loco.distance is not None else 0.0
-        least = max(
-            amount / HURRIED_LOADED_TURN_RATE,
-            least_duration(amount, turn_rate_limit(period, geometry.hip_yaw_range)),
-            dist / HURRIED_LOADED_WALK_SPEED,
-            least_duration(dist, walk_speed_limit(period, geometry.walk_stride)),
-        )
-        # As late as the rates allow, if not until then (a gentler pull all the same).
-        start = min(ceil_time(until), math.floor((loco.end - least) * 100.0 + 1e-6) / 100.0)
-        if start <= loco.start + 1e-9:
+        if amount / duration > HURRIED_LOADED_TURN_RATE + 1e-9:
+            continue
+        if peak_rate(amount, duration) > turn_rate_limit(period, geometry.hip_yaw_range) + 1e-9:
+            continue
+        if dist / duration > HURRIED_LOADED_WALK_SPEED + 1e-9:
+            continue
+        if peak_rate(dist, duration) > walk_speed_limit(period, geometry.walk_stride) + 1e-9:
             continue
         by_index[loco.index] = replace(loco, start=start)
         notes.append(
             f"the {loco.action} written from {loco.start:.2f} s starts at {start:.2f} s (ends "
-            f"at {loco.end:.2f} s as written) so that the robot stands on both feet while it "
-            f"lifts '{hold.object}' ({hold.mass:g} kg, {ahead:.2f} m ahead) and pulls it in"
+            f"at {loco.end:.2f} s as written) so that the robot stands on both feet until the "
+            f"pick of '{hold.object}' ({hold.mass:g} kg, {ahead:.2f} m ahead) ends"
         )
     if not notes:
         return tasks, ()

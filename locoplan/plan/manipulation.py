@@ -99,9 +99,6 @@ class ObjectHold:
     points (`locoplan.plan.payload.pre_lean_room`): where a foot steps within a second of
     the lift-off, the controller leans back before the load comes on by the equal-margin
     share of the shift, at most this far; 0 until the compiler sets it.
-    `gentle_pull_end` (s): for a heavy object (constants' PULL_FAST_SHARE) lifted standing,
-    when its raise, carry and pull-in would end at the gentlest acceleration (`pull_accel`)
-    if the robot did not step before (`_Builder._heavy_pull_accel`); -inf otherwise.
     """
 
     object: str
@@ -118,7 +115,6 @@ class ObjectHold:
     grip_height: float = 0.0
     lean_weight: float = 1.0
     pre_lean: float = 0.0
-    gentle_pull_end: float = -math.inf
 
 
 @dataclass(frozen=True, slots=True)
@@ -176,7 +172,6 @@ class _OpenHold:
     half_width: float
     yaw_in_grasp: float
     grip_height: float
-    gentle_pull_end: float = -math.inf
 
 
 @dataclass(frozen=True, slots=True)
@@ -400,7 +395,6 @@ class _Builder:
         t_settle = self.next_use(task)
         accel = pull_accel(obj.mass, geom)
         raise_accel = accel
-        gentle_end = -math.inf
         if moving:
             target = carry_in(support_half_width(obj, oyaw, ax, ay), geom)
             if target < forward:
@@ -410,7 +404,7 @@ class _Builder:
                 if heavy and not self.steps_during(t_lift, t_raise):
                     rise = self._carry_height(task, obj, target, gz + phases.raise_height, lift)
                     rise -= gz + phases.raise_height - self.trunk.height
-                    raise_accel, accel, gentle_end = self._heavy_pull_accel(
+                    raise_accel, accel = self._heavy_pull_accel(
                         task, t_lift, t_raise, t_settle, pull, rise, accel
                     )
                 pull = min(pull, rest_to_rest_distance(t_raise - t_lift, raise_accel))
@@ -475,16 +469,7 @@ class _Builder:
             self.hand_holds[h] = name
             self.active[h].append((min(task.start, approach[0].t0), t_end))
         self.open_holds[name] = _OpenHold(
-            name,
-            obj.mass,
-            hands,
-            task,
-            t_contact,
-            t_lift,
-            half,
-            oyaw - math.atan2(ay, ax),
-            lift,
-            gentle_end,
+            name, obj.mass, hands, task, t_contact, t_lift, half, oyaw - math.atan2(ay, ax), lift
         )
         self.events.append(PlanEvent(t_contact, "grasp", task.index, name))
         self.events.append(PlanEvent(t_lift, "lift", task.index, name))
@@ -514,7 +499,7 @@ class _Builder:
         pull: float,
         rise: float,
         gentlest: float,
-    ) -> tuple[float, float, float]:
+    ) -> tuple[float, float]:
         """Peak accelerations (m/s^2) of the raise and of the carry move of a heavy object
         (PULL_FAST_SHARE) that the robot lifts standing on both feet: the gentlest, down to
         `gentlest` (its `pull_accel`), with which the raise (pulling in as it goes up) and
@@ -522,8 +507,7 @@ class _Builder:
         done before the first step after the lift-off (and before the hands' next task, at
         `t_next` s, inf if none); if
         none is, the whole pull during the raise, as fast as that takes, and the carry move
-        (up only) at `gentlest`. Third, when the gentlest would have ended (s; the
-        compiler's `_wait_for_heavy_lifts` moves the first step after it where it may).
+        (up only) at `gentlest`.
 
         Why: a heavy object still far ahead in the first single support saturates the stance
         hip pitch (constants' PULL_FAST_SHARE), so it must be in before the robot steps; but
@@ -533,26 +517,25 @@ class _Builder:
         minimum and the trunk sank 12 cm with the box put back on its table (envelope seed
         24681, transfer-009, which then had 0.56 s standing before its next turn)."""
         t_raise_len = t_raise - t_lift
+        fast = pull / rest_to_rest_distance(t_raise_len, 1.0) if t_raise_len > 0.0 else gentlest
+        if fast <= gentlest:
+            return gentlest, gentlest
+        t_step = min((a for a, b in self.swings if b > t_lift), default=math.inf)
+        t_by = min(t_step, max(task.end, t_next))
 
         def done(a: float) -> float:
             rest = pull - min(pull, rest_to_rest_distance(t_raise_len, a))
             return t_raise + rest_to_rest_duration(math.hypot(rest, max(rise, 0.0)), a)
 
-        gentle_end = done(gentlest)
-        fast = pull / rest_to_rest_distance(t_raise_len, 1.0) if t_raise_len > 0.0 else gentlest
-        if fast <= gentlest:
-            return gentlest, gentlest, gentle_end
-        t_step = min((a for a, b in self.swings if b > t_lift), default=math.inf)
-        t_by = min(t_step, max(task.end, t_next))
-        if gentle_end <= t_by:
-            return gentlest, gentlest, gentle_end
+        if done(gentlest) <= t_by:
+            return gentlest, gentlest
         if done(fast) > t_by:
-            return fast, gentlest, gentle_end
+            return fast, gentlest
         lo, hi = gentlest, fast
         for _ in range(40):
             mid = 0.5 * (lo + hi)
             lo, hi = (lo, mid) if done(mid) <= t_by else (mid, hi)
-        return hi, hi, gentle_end
+        return hi, hi
 
     def _carry_move(
         self,
@@ -632,7 +615,6 @@ class _Builder:
                 hold.half_width,
                 hold.yaw_in_grasp,
                 hold.grip_height,
-                gentle_pull_end=hold.gentle_pull_end,
             )
         )
         for h in hold.hands:
