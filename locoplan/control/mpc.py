@@ -641,7 +641,8 @@ class MultiContactMpc:
             fallback = "shifted"
         U, X = self._finish(inp, st, kern, U_foot3)
         self._prev_U, self._prev_contact, self._prev_t = U_foot3, inp.contact.copy(), inp.t
-        self._prev_com = X[:, 3:6].copy()
+        if s.levers == "predicted":
+            self._prev_com = X[:, 3:6].copy()
         if used.ok and warm:
             self._prev_active = active_constraint_ids(used)
             self._prev_fs = st.cols[::5] // 5
