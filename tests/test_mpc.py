@@ -416,6 +416,15 @@ def test_predicted_levers_are_the_previous_prediction() -> None:
     assert np.allclose(path[0], want, atol=1e-12)
     # The reference levers ignore the prediction.
     assert MultiContactMpc(MpcSettings(levers="reference"))._lever_path(inp) is None
+    # "stepping": the prediction's levers only while a foot swings within the horizon.
+    stepping = MultiContactMpc(MpcSettings(qp=TIGHT, levers="stepping"))
+    stepping.update(_ahead(0.0))
+    assert stepping._lever_path(_ahead(0.03)) is None  # both feet stand throughout
+    swinging = replace(_ahead(0.03), contact=stepping_contact())
+    predicted = MultiContactMpc(MpcSettings(qp=TIGHT, levers="predicted"))
+    predicted.update(_ahead(0.0))
+    got, want = stepping._lever_path(swinging), predicted._lever_path(swinging)
+    assert got is not None and want is not None and np.array_equal(got, want)
     with pytest.raises(ValueError):
         MpcSettings(levers="measured")
 

@@ -81,7 +81,7 @@ BoolArray = npt.NDArray[np.bool_]
 
 MODELS: Final[tuple[str, ...]] = ("external-force", "combined")
 FORMULATIONS: Final[tuple[str, ...]] = ("condensed", "sparse")
-LEVERS: Final[tuple[str, ...]] = ("reference", "predicted")
+LEVERS: Final[tuple[str, ...]] = ("reference", "predicted", "stepping")
 FALLBACKS: Final[tuple[str, ...]] = ("none", "relaxed", "shifted")
 
 _DEFAULT_Q: Final = (
@@ -185,8 +185,9 @@ class MpcSettings:
     # The stance feet's vertical forces at every step sum to at least this fraction of the
     # weight m g (`MultiContactMpc._support`); 0: only f_min per foot.
     support_fraction: float = 0.0
-    # Where step k >= 1's lever arms come from: "reference" (x_ref[k-1]'s CoM) or
-    # "predicted" (the previous update's predicted CoM at that time; `_lever_path`).
+    # Where step k >= 1's lever arms come from: "reference" (x_ref[k-1]'s CoM),
+    # "predicted" (the previous update's predicted CoM at that time; `_lever_path`) or
+    # "stepping" (predicted while a foot swings within the horizon, else the reference's).
     levers: str = "reference"
 
     def __post_init__(self) -> None:
@@ -641,7 +642,7 @@ class MultiContactMpc:
             fallback = "shifted"
         U, X = self._finish(inp, st, kern, U_foot3)
         self._prev_U, self._prev_contact, self._prev_t = U_foot3, inp.contact.copy(), inp.t
-        if s.levers == "predicted":
+        if s.levers != "reference":
             self._prev_com = X[:, 3:6].copy()
         if used.ok and warm:
             self._prev_active = active_constraint_ids(used)
@@ -791,7 +792,10 @@ class MultiContactMpc:
         lost standing holds in the envelope (seeds 46021, 49021). Levers from the
         reference at step 0 too lost them as well.
         """
-        if self.settings.levers != "predicted" or self._prev_com is None:
+        levers = self.settings.levers
+        if levers == "reference" or self._prev_com is None:
+            return None
+        if levers == "stepping" and bool(np.all(inp.contact)):
             return None
         N, dt = self.settings.horizon, self.settings.dt
         # Previous row j is at t_prev + (j + 1) dt; step k >= 1 at t + k dt.
