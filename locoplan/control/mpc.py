@@ -766,7 +766,8 @@ class MultiContactMpc:
 
     def _lever_path(self, inp: MpcInput) -> FloatArray | None:
         """The CoM (N, 3) that steps 1..N's lever arms are taken from with ``levers`` =
-        "predicted", else None (the reference's, `step_terms`).
+        "predicted" (or "stepping" while a foot swings within the horizon), else None (the
+        reference's, `step_terms`).
 
         Row k - 1 is the previous update's predicted CoM at this update's step k (time
         t + k dt), linearly interpolated between its steps; past its horizon its last
@@ -790,7 +791,9 @@ class MultiContactMpc:
         region keeping the levers within today's error). Taking only step 1's lever from
         the prediction moved the force pulse to steps 1 and 2 (f_min, f_min, 500 N) and
         lost standing holds in the envelope (seeds 46021, 49021). Levers from the
-        reference at step 0 too lost them as well.
+        reference at step 0 too lost them as well. "stepping" (the reference's levers while
+        both feet stand throughout) kept the holds, but paired on fresh seed 50021 it gave
+        390 of 400 against 395, and it fails a recovery-step push test.
         """
         levers = self.settings.levers
         if levers == "reference" or self._prev_com is None:
