@@ -219,25 +219,15 @@ def _face_the_pick(
     does not start inside a turn), and whatever the hurried plan's own reach check raises
     for a later pick."""
     # The scenario package imports the plan's profiles: import its limits here.
-    from locoplan.scenario.feasibility import ceil_time, turn_rate_limit
+    from locoplan.scenario.feasibility import ceil_time
 
-    pick = next((t for t in tasks if t.index == exc.task_index and t.action == "pick"), None)
-    if pick is None:
-        raise exc
-    turn = next((t for t in tasks if t.action == "turn" and t.start <= pick.start < t.end), None)
-    if turn is None or turn.angle is None:
-        raise exc
-    amount = abs(turn.angle)
+    pick, turn = _task_and_its_turn(tasks, exc, "pick")
     loaded = any(
         h.pick_task != pick.index and h.lift < turn.end and h.release > turn.start
         for h in plan.holds
     )
     cap = HURRIED_LOADED_TURN_RATE if loaded else HURRIED_TURN_RATE
-    limit = turn_rate_limit(scenario.gait.period, geometry.hip_yaw_range)
-    rate = min(cap, limit * (1.0 - CRUISE_RAMP))
-    shortest = ceil_time(amount / rate)
-    if shortest >= turn.duration:
-        raise exc
+    shortest = _shortest_turn(scenario, geometry, turn, cap, exc)
 
     grasp = planned_grasp(plan, pick.index, scenario.robot)
     # A lift-off after the written turn's end already faces the object: the grip points are
@@ -255,6 +245,40 @@ def _face_the_pick(
     return _hurry_turn(
         tasks, (), turn, first, shortest, build, f"'{pick.object}' at its lift-off", check, exc
     )
+
+
+def _task_and_its_turn(
+    tasks: tuple[PlannedTask, ...], exc: InfeasiblePlanError, action: str
+) -> tuple[PlannedTask, PlannedTask]:
+    """The `action` task that `exc` refused and the turn (with an angle) it starts in;
+    raises `exc` when there is no such pair."""
+    task = next((t for t in tasks if t.index == exc.task_index and t.action == action), None)
+    if task is None:
+        raise exc
+    turn = next((t for t in tasks if t.action == "turn" and t.start <= task.start < t.end), None)
+    if turn is None or turn.angle is None:
+        raise exc
+    return task, turn
+
+
+def _shortest_turn(
+    scenario: Scenario,
+    geometry: PlanGeometry,
+    turn: PlannedTask,
+    cap: float,
+    exc: InfeasiblePlanError,
+) -> float:
+    """The shortest duration (s, rounded up to 0.01 s) of `turn` no quicker than `cap`
+    (rad/s) on average nor than the hip yaw range (`geometry`'s) allows at the gait's
+    period; raises `exc` when that is not shorter than the turn as written."""
+    from locoplan.scenario.feasibility import ceil_time, turn_rate_limit
+
+    limit = turn_rate_limit(scenario.gait.period, geometry.hip_yaw_range)
+    rate = min(cap, limit * (1.0 - CRUISE_RAMP))
+    shortest = ceil_time(abs(turn.angle or 0.0) / rate)
+    if shortest >= turn.duration:
+        raise exc
+    return shortest
 
 
 def _hurry_turn(
@@ -323,15 +347,10 @@ def _face_the_drop(
     turn's written end. Raises `exc` when the quickest such turn does not reach the place
     points, or the drop does not start inside a turn. `notes`: the plan's notes that `build`
     does not add itself."""
-    from locoplan.scenario.feasibility import ceil_time, turn_rate_limit
+    from locoplan.scenario.feasibility import ceil_time
 
     tasks = plan.tasks
-    drop = next((t for t in tasks if t.index == exc.task_index and t.action == "drop"), None)
-    if drop is None:
-        raise exc
-    turn = next((t for t in tasks if t.action == "turn" and t.start <= drop.start < t.end), None)
-    if turn is None or turn.angle is None:
-        raise exc
+    drop, turn = _task_and_its_turn(tasks, exc, "drop")
     lowering = min(
         (
             g.t0
@@ -343,11 +362,7 @@ def _face_the_drop(
     )
     if lowering is None or lowering >= turn.end - HURRY_STEP:
         raise exc
-    limit = turn_rate_limit(scenario.gait.period, geometry.hip_yaw_range)
-    rate = min(HURRIED_LOADED_TURN_RATE, limit * (1.0 - CRUISE_RAMP))
-    shortest = ceil_time(abs(turn.angle) / rate)
-    if shortest >= turn.duration:
-        raise exc
+    shortest = _shortest_turn(scenario, geometry, turn, HURRIED_LOADED_TURN_RATE, exc)
     first = max(shortest, ceil_time(lowering - turn.start))
 
     def check(hurried: Plan) -> None:
