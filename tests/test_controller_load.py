@@ -43,10 +43,10 @@ def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
     time (t + LOAD_LEAD) of the last instants before it lies past the release, where the plan
     has no object between the hands, and the shift there once fell to zero with the measured
     load still on (the CoM reference jumped 7 cm forward; envelope seed 11, transfer-008 fell
-    onto its target). Its size is the share `_lean_share` (the plan's lean weight for this
-    5 kg hold, eased towards the release: `_lean_weights`) of m_o d / (m + m_o) for the load
-    counted (`shift_mass`) and the object's planned offset d from the CoM reference, checked
-    to 1 mm (the object path's cache rounds times to 1 us)."""
+    onto its target). Its size is the share `_lean_share` (the whole shift, eased towards the
+    release: `_lean_weights`) of m_o d / (m + m_o) for the load counted (`shift_mass`) and
+    the object's planned offset d from the CoM reference, checked to 1 mm (the object path's
+    cache rounds times to 1 us)."""
     plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
     desc = load_robot_description("hector")
     ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
@@ -125,34 +125,33 @@ def test_lean_share_leaves_equal_centre_of_pressure_margins_loaded_and_unloaded(
 
 
 def test_lean_weights_follow_the_holds_shift_window() -> None:
-    """`_lean_weights` gives a hold's plan weight from its grasp to LOAD_RAMP_DOWN before its
-    release, eases it to 0 (the equal-margin share) by the release, keeps that for
-    LOAD_RAMP_DOWN after it (the window the CoM shift counts its load in) and gives 1
-    elsewhere; in between it falls monotonically (smoothstep)."""
-    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    """`_lean_weights` is 1 (the whole shift) from a hold's grasp to LOAD_RAMP_DOWN before its
+    release, whatever its load (a 5 kg and a 2 kg hold), eases to 0 (the equal-margin share)
+    by the release, keeps that for LOAD_RAMP_DOWN after it (the window the CoM shift counts
+    its load in) and gives 1 elsewhere; in between it falls monotonically (smoothstep)."""
     desc = load_robot_description("hector")
-    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
-    (hold,) = plan.holds
-    assert hold.lean_weight > 0.0
-    t = np.array(
-        [
-            hold.grasp - 0.01,
-            hold.grasp + 0.01,
-            hold.release - LOAD_RAMP_DOWN - 0.01,
-            hold.release - 1e-6,
-            hold.release + 0.01,
-            99.0,
-        ]
-    )
-    np.testing.assert_allclose(
-        ctl._lean_weights(t),
-        [1.0, hold.lean_weight, hold.lean_weight, 0.0, 0.0, 1.0],
-        atol=1e-9,
-    )
-    ramp = np.linspace(hold.release - LOAD_RAMP_DOWN, hold.release, 31)
-    w = ctl._lean_weights(ramp)
-    assert np.all(np.diff(w) <= 1e-12)
-    assert w[15] == pytest.approx(0.5 * hold.lean_weight, abs=1e-9)
+    for mass in ("5.0", "2.0"):
+        text = HOLD_AND_PUT_BACK.replace("mass: 5.0", f"mass: {mass}")
+        assert text != HOLD_AND_PUT_BACK or mass == "5.0"
+        plan = compile_plan(scenario_from_text(text))
+        ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+        (hold,) = plan.holds
+        assert hold.mass == float(mass)
+        t = np.array(
+            [
+                hold.grasp - 0.01,
+                hold.grasp + 0.01,
+                hold.release - LOAD_RAMP_DOWN - 0.01,
+                hold.release - 1e-6,
+                hold.release + 0.01,
+                99.0,
+            ]
+        )
+        np.testing.assert_allclose(ctl._lean_weights(t), [1.0, 1.0, 1.0, 0.0, 0.0, 1.0], atol=1e-9)
+        ramp = np.linspace(hold.release - LOAD_RAMP_DOWN, hold.release, 31)
+        w = ctl._lean_weights(ramp)
+        assert np.all(np.diff(w) <= 1e-12)
+        assert w[15] == pytest.approx(0.5, abs=1e-9)
 
 
 def test_shift_mass_is_the_measured_load_once_the_load_is_on() -> None:

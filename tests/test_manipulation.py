@@ -187,3 +187,43 @@ def test_a_heavy_fast_throw_keeps_the_feet_down(tmp_path: Path) -> None:
     target = result.plan.object_target("ball")
     assert target.position is not None
     assert np.linalg.norm(ball[down[0], :2] - np.asarray(target.position)[:2]) < 0.15
+
+
+# Envelope seed 50021's dynamic transfer-001: the parcel (5.89 kg, 0.37 m ahead) is picked at
+# the end of a 60 deg turn and the robot turns back 112 deg 0.3 s after its weight came on.
+HEAVY_TURN_BACK = """
+version: 1
+name: heavy-turn-back
+gait: {period: 0.44, swing: 0.18}
+objects:
+  parcel: {shape: box, size: [0.167, 0.238, 0.212], mass: 5.89,
+           position: [0.177, 0.307, 0.608], yaw: 60.1}
+fixtures:
+  table: {kind: table, position: [0.275, 0.478, 0.0], size: [0.532, 0.423, 0.502], yaw: 60.1}
+  platform: {kind: platform, position: [0.218, -0.282, 0.0], size: [0.335, 0.326, 0.49], yaw: -52.3}
+tasks:
+  - {action: turn, angle: 60.1, start: 0.0, duration: 1.38}
+  - {action: pick, object: parcel, start: 0.77, duration: 1.02}
+  - {action: turn, angle: -112.4, start: 1.79, duration: 2.27}
+  - {action: drop, object: parcel, onto: platform, start: 3.98, duration: 0.82}
+end: 5.8
+"""
+
+
+def test_a_heavy_parcel_picked_before_a_turn_back_keeps_the_trunk_on_its_path(
+    tmp_path: Path,
+) -> None:
+    """The whole held-load lean (`LocoManipulationController._lean_weights`): with half of it
+    the parcel's weight came on with the combined CoM 1-3 cm inside the toes, the MPC pushed
+    the CoM forward (0.2-0.5 m/s), the turn's steps walked the trunk 0.3-0.5 m off its path
+    into the table and the robot fell. Now the trunk stays within 0.1 m of the plan's trunk
+    path (6 cm measured) and the parcel ends on its platform."""
+    loaded = load_scenario_file(Path("heavy-turn-back.yaml"), HEAVY_TURN_BACK)
+    result = run_scenario(loaded.scenario, loaded.text, RunOptions(out_dir=tmp_path))
+    assert not result.metrics["fell"]
+    assert result.metrics["peak_torque_ratio"] <= 1.0
+    assert result.metrics["objects"]["parcel"]["on"] == "platform"
+    rec = result.record
+    base = np.asarray(rec.base_position)
+    ref = np.array([result.plan.trunk_reference_at(float(t)).position for t in rec.t])
+    assert np.max(np.hypot(*(base[:, :2] - ref[:, :2]).T)) < 0.1

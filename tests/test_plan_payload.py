@@ -22,14 +22,11 @@ from locoplan.envelope import FAMILIES, generate_suite
 from locoplan.plan import Plan, PlanError, compile_plan
 from locoplan.plan.compiler import HURRIED_LOADED_TURN_RATE, HURRIED_TURN_RATE
 from locoplan.plan.payload import (
-    LEAN_RATIO_HIGH,
-    LEAN_RATIO_LOW,
     PLACE_SLACK,
     PRE_LEAN_MAX,
     PRE_LEAN_TOL,
     check_payload,
     grasp_reach_limit,
-    lean_weight,
     payload_margins,
     planned_grasp,
     planned_holds,
@@ -80,29 +77,6 @@ def test_poses_of_a_plan_are_the_carry_and_the_place_points() -> None:
     assert place.pose.p_hands_trunk[0][2] == pytest.approx(0.543 - plan.trunk.height, abs=1e-3)
     assert carry.mass == place.mass == 11.0
     assert carry.pose.trunk_height == plan.trunk.height
-
-
-def test_lean_weight_rises_with_the_holds_static_torque_ratio() -> None:
-    """`lean_weight` is 0 up to LEAN_RATIO_LOW, 1 from LEAN_RATIO_HIGH (and for an unbalanced
-    pose, ratio inf), linear between; the compiler gives each hold the weight of its worst
-    pose's ratio at the centring shift (here the place pose, arms reaching out to put the
-    block back): a light hold (2 kg, ratio 0.19) the equal-margin lean, a heavy one (14 kg,
-    0.91) the whole shift, a 6 kg one (0.43) in between."""
-    assert lean_weight(0.0) == 0.0
-    assert lean_weight(LEAN_RATIO_LOW) == 0.0
-    assert lean_weight(0.5 * (LEAN_RATIO_LOW + LEAN_RATIO_HIGH)) == pytest.approx(0.5)
-    assert lean_weight(LEAN_RATIO_HIGH) == 1.0
-    assert lean_weight(float("inf")) == 1.0
-    model = static_model("hector")
-    weights = []
-    for mass in (2.0, 6.0, 14.0):
-        plan = compile_plan(scenario_from_text(hold_script(mass)))
-        (hold,) = plan.holds
-        worst = max(model.ratio_at_centre(p.pose, p.mass) for p in planned_holds(plan, model))
-        assert hold.lean_weight == pytest.approx(lean_weight(worst), abs=1e-12), mass
-        weights.append(hold.lean_weight)
-        assert plan.to_dict()["holds"][0]["lean_weight"] == hold.lean_weight  # `plan --json`
-    assert weights[0] == 0.0 and 0.1 < weights[1] < 0.5 and weights[2] == 1.0, weights
 
 
 def test_pre_lean_room_is_how_far_back_the_arms_still_reach_the_grip() -> None:

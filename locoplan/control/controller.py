@@ -1450,8 +1450,8 @@ class LocoManipulationController:
 
     def _lean_share(self, size: FloatArray, weight: FloatArray) -> FloatArray:
         """Share (n,) of the full load shift of size `size` (n,) m that the CoM reference
-        takes, for the plan's lean weights `weight` (n,) (`ObjectHold.lean_weight`): the
-        equal-margin share beta plus `weight` of the rest, beta + w (1 - beta).
+        takes, for the lean weights `weight` (n,) (`_lean_weights`): the equal-margin share
+        beta plus `weight` of the rest, beta + w (1 - beta).
 
         Why not always the whole s: the load is not on the robot at every instant the plan
         says it is. It comes onto the hands as the object is lifted (later when the arms lag
@@ -1460,9 +1460,10 @@ class LocoManipulationController:
         behind its nominal place: 7-11 cm for 5-8 kg held 0.3-0.37 m ahead, behind the heels
         (6 cm behind the sole site), so it is balanced only while the whole load is on; robots
         fell backwards when the load came late at a pick or went early at a drop (envelope
-        seed 11: walk-carry-009, 7.6 kg; transfers after their release). Why not always beta:
-        heavy holds need the whole shift (`locoplan.plan.payload.LEAN_RATIO_LOW`), so the plan
-        weights it by the hold's static torque ratio.
+        seed 11: walk-carry-009, 7.6 kg; transfers after their release). Since the shift
+        counts the measured load (`shift_mass`), the whole s stands while the load is held
+        and the equal-margin share only where the load comes on or goes off
+        (`_lean_weights`, `_pre_lean`).
 
         The equal-margin share: along the feet (line feet: support from `heel` behind to `toe`
         ahead of the sole site, robot.yaml), the robot's own CoM stands `c` ahead of the sole
@@ -1477,22 +1478,38 @@ class LocoManipulationController:
         return beta + np.asarray(weight, dtype=float) * (1.0 - beta)
 
     def _lean_weights(self, t_lead: FloatArray) -> FloatArray:
-        """The plan's lean weight (n,) at the lead times t_lead (n,): the largest
-        `lean_weight` of the holds whose shift window (grasp to LOAD_RAMP_DOWN after the
-        release, as `shift_mass`) contains the time; 1 outside every hold (no load there).
-        Before a drop's release the weight eases to 0 over LOAD_RAMP_DOWN (smoothstep), so
-        that the lean is the equal-margin share when the load goes off: a heavy hold's whole
-        shift (9-10 cm for 7.6 kg 0.34 m ahead) left the unloaded robot's CoM behind its
-        heels, while the equal share leaves it as far inside the heels as the loaded
-        combined CoM is inside the toes (`_lean_share`)."""
+        """Weight (n,) of the rest of the held-load lean beyond its equal-margin share at the
+        lead times t_lead (n,) (`_lean_share`): 1, the whole shift that centres robot and
+        load over the feet, except before a drop's release, where it eases to 0 over
+        LOAD_RAMP_DOWN (smoothstep) and stays 0 until LOAD_RAMP_DOWN after it (the window
+        in which the shift still counts that load, as `shift_mass`), so that the lean is
+        the equal-margin share when the load goes off: the whole shift (9-10 cm for 7.6 kg
+        0.34 m ahead) left the unloaded robot's CoM behind its heels, while the equal share
+        leaves it as far inside the heels as the loaded combined CoM is inside the toes.
+
+        Why the whole shift while the load is held, for every load: the shift counts the
+        load the hands measure (`shift_mass`), so a load that comes on late does not lean
+        the robot back before it is there, and the equal-margin share (half the shift on
+        HECTOR) left a 5-6 kg parcel's combined CoM 1-3 cm inside the toes. The load comes
+        off the table within 40-60 ms of the hands taking it, 0.15 s after the planned
+        lift-off, and the MPC, whose feet could not answer that pitch torque, pushed the
+        CoM forward (40 N, 0.2-0.75 m/s) in every heavy transfer looked at (envelope seed
+        50021: transfer-001, -004, -012, -014, -029, -033, -042, -045); where a turn's step
+        came before the lurch was caught, the robot walked off its reference into the table
+        and fell. Until 2026-12-05 a plan-chosen weight (0 up to a third of the torque
+        limits' static ratio, 1 from two thirds) gave light and medium loads the equal
+        share. Measured on the heavy scripts of seeds 46021, 48021, 49021 and 50021 (69
+        transfers of 4.5 kg and more, 26 walk-carries of 6.5 kg and more, 40 standing holds
+        of 9 kg and more, dynamic): 120 -> 125 of 135 succeed (+9 -4; every standing hold
+        both ways); on the whole envelope of fresh seed 51021: see the README."""
         t = np.asarray(t_lead, dtype=float)
         out = np.full(t.shape, -1.0)
         for h in self.plan.holds:
             inside = (t >= h.grasp) & (t < h.release + LOAD_RAMP_DOWN)
-            w = np.full(t.shape, h.lean_weight)
+            w = np.ones(t.shape)
             if h.release_kind == "drop" and math.isfinite(h.release):
                 down = np.clip((h.release - t) / LOAD_RAMP_DOWN, 0.0, 1.0)
-                w *= down * down * (3.0 - 2.0 * down)
+                w = down * down * (3.0 - 2.0 * down)
             out = np.where(inside, np.maximum(out, w), out)
         return np.where(out < 0.0, 1.0, out)
 

@@ -17,7 +17,7 @@ from locoplan.plan.payload import (
     check_payload,
     check_place_reach,
     planned_grasp,
-    with_lean_weights,
+    with_pre_leans,
 )
 from locoplan.plan.plan import Plan
 from locoplan.plan.profiles import CRUISE_RAMP
@@ -102,7 +102,7 @@ def compile_plan(
         # The notes of this plan beyond the heavy lifts' (a hurried pick's) stay.
         plan = _face_the_drop(scenario, plan, plan.notes[len(base_notes) :], exc, build, geometry)
     check_payload(plan, scenario.robot)
-    return with_lean_weights(plan, scenario.robot)
+    return with_pre_leans(plan, scenario.robot)
 
 
 def _assemble(

@@ -129,7 +129,6 @@ def plan_to_dict(plan: Plan, reference_dt: float = 0.02) -> dict[str, Any]:
                 "release": _t(h.release, te),
                 "release_task": h.release_task,
                 "release_kind": h.release_kind,
-                "lean_weight": h.lean_weight,
                 "pre_lean": h.pre_lean,
             }
             for h in plan.holds

@@ -90,11 +90,7 @@ class ObjectHold:
     its weight acts on the robot (sigma_e); `release` (s): the hands let go (inf: held to the
     end). `hands`: "L"/"R" names. `half_width` (m): half the object's width across the grip;
     `yaw_in_grasp` (rad): object yaw minus approach yaw at the pick; `grip_height` (m): how far
-    above the object's centre the hands hold it. `lean_weight` (0..1): how much of the rest of
-    the held-load lean the controller adds to its equal-margin share while this object is held
-    (0: the equal-margin share, 1: the whole shift that centres robot and load over the feet);
-    the compiler sets it from the hold's static torque ratio (`locoplan.plan.payload.
-    lean_weight`), and 1 (the whole shift) stands until then. `pre_lean` (m): how far the
+    above the object's centre the hands hold it. `pre_lean` (m): how far the
     trunk may stand back from the object at the lift-off with the arms still reaching its grip
     points (`locoplan.plan.payload.pre_lean_room`): where a foot steps within a second of
     the lift-off, the controller leans back before the load comes on by the equal-margin
@@ -113,7 +109,6 @@ class ObjectHold:
     half_width: float
     yaw_in_grasp: float
     grip_height: float = 0.0
-    lean_weight: float = 1.0
     pre_lean: float = 0.0
 
 

@@ -58,23 +58,6 @@ if TYPE_CHECKING:
 
 PoseKind = Literal["grasp", "carry", "place"]
 
-# `lean_weight`: a held load's CoM lean is the controller's equal-margin share (about half the
-# shift that centres robot and load over the feet: the unloaded robot keeps as much room to its
-# heels as the loaded one to its toes, so a load that comes on late or goes off early does not
-# tip the robot backwards) for holds whose worst static torque ratio is at most
-# LEAN_RATIO_LOW, the whole shift from LEAN_RATIO_HIGH, linear between. Why heavy holds need
-# the whole shift: the lift's transient already takes hip and shoulder pitch to their limits
-# (14 kg standing hold, static ratio 0.69: peak ratio 1.0 with the whole shift); with 0.9 of
-# it the trunk sank 5.5 cm in the lift, the block went back onto its table and the measured
-# hand load, now near zero, took the lean away for good. With 0.5 or 0.6 of the shift the same
-# happened to the 10 kg hold (ratio 0.51), not with 0.7 or more. The thirds of the limit are
-# not fitted: they put every envelope transfer (0.5-6 kg, ratios up to 0.37) at or near the
-# equal-margin share, which was worth 8 of 60 transfers on seed 8080, and the 10 / 14 kg
-# standing-load holds (0.30 m ahead, ratios 0.51 / 0.69) at 0.77 / 1.0 of the shift, where a
-# constant share held them from 0.7 / only at 1.0. Checked on those two holds and on envelope
-# seeds 8080 and 9191, 200 scripts each (README).
-LEAN_RATIO_LOW = 1.0 / 3.0
-LEAN_RATIO_HIGH = 2.0 / 3.0
 # Largest pre-lift lean (m) `pre_lean_room` looks for, and its search step (m): the
 # equal-margin share of the shift is at most half the support length (7.5 cm for HECTOR's
 # line feet) for every envelope load, and 5 mm is a quarter of the hands' tracking error.
@@ -218,32 +201,17 @@ def planned_holds(plan: Plan, model: StaticModel | None = None) -> tuple[Planned
     return tuple(out)
 
 
-def lean_weight(ratio: float) -> float:
-    """The `ObjectHold.lean_weight` of a hold whose worst static torque ratio (carry or place
-    pose, `StaticModel.ratio_at_centre`: the shift that centres robot and load) is `ratio`:
-    0 up to LEAN_RATIO_LOW, 1 from LEAN_RATIO_HIGH (and for an unbalanced pose), linear
-    between (constants' docstring)."""
-    if not math.isfinite(ratio):
-        return 1.0
-    return min(max((ratio - LEAN_RATIO_LOW) / (LEAN_RATIO_HIGH - LEAN_RATIO_LOW), 0.0), 1.0)
-
-
-def with_lean_weights(plan: Plan, robot: str) -> Plan:
-    """`plan` with each hold's `lean_weight` set from its worst static torque ratio over its
-    carry and place poses (`lean_weight`; the ratios are those `check_payload` computed,
-    memoised in the robot's `StaticModel`) and its `pre_lean` from the arms' reach at the
-    grasp (`pre_lean_room`)."""
+def with_pre_leans(plan: Plan, robot: str) -> Plan:
+    """`plan` with each hold's `pre_lean` set from the arms' reach at its grasp
+    (`pre_lean_room`)."""
     if not plan.holds:
         return plan
     model = _model(robot)
     holds = []
     for hold in plan.holds:
-        ratios = [model.ratio_at_centre(p.pose, p.mass) for p in _hold_poses(plan, hold, model)]
         grasp = _grasp_pose(plan, hold)
         room = pre_lean_room(model, grasp.pose) if grasp is not None else 0.0
-        holds.append(
-            replace(hold, lean_weight=lean_weight(max(ratios, default=0.0)), pre_lean=room)
-        )
+        holds.append(replace(hold, pre_lean=room))
     return replace(plan, manipulation=replace(plan.manipulation, holds=tuple(holds)))
 
 
