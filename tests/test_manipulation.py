@@ -214,10 +214,10 @@ def test_a_heavy_parcel_picked_before_a_turn_back_keeps_the_trunk_on_its_path(
     tmp_path: Path,
 ) -> None:
     """The whole held-load lean (`LocoManipulationController._lean_weights`): with half of it
-    the parcel's weight came on with the combined CoM 1-3 cm inside the toes, the MPC pushed
-    the CoM forward (0.2-0.5 m/s), the turn's steps walked the trunk 0.3-0.5 m off its path
-    into the table and the robot fell. Now the trunk stays within 0.1 m of the plan's trunk
-    path (6 cm measured) and the parcel ends on its platform."""
+    the parcel's weight came on with the combined CoM 1-3 cm inside the toes, the pull-in's
+    reaction ran the CoM forward (0.2-0.5 m/s), the turn's steps walked the trunk 0.3-0.5 m off
+    its path into the table and the robot fell. Now the trunk stays within 0.1 m of the plan's
+    trunk path (6 cm measured) and the parcel ends on its platform."""
     loaded = load_scenario_file(Path("heavy-turn-back.yaml"), HEAVY_TURN_BACK)
     result = run_scenario(loaded.scenario, loaded.text, RunOptions(out_dir=tmp_path))
     assert not result.metrics["fell"]

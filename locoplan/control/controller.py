@@ -1492,16 +1492,18 @@ class LocoManipulationController:
         the robot back before it is there, and the equal-margin share (half the shift on
         HECTOR) left a 5-6 kg parcel's combined CoM 1-3 cm inside the toes. The load comes
         off the table within 40-60 ms of the hands taking it, 0.15 s after the planned
-        lift-off, and the MPC, whose feet could not answer that pitch torque, pushed the
-        CoM forward (40 N, 0.2-0.75 m/s) in every heavy transfer looked at (envelope seed
-        50021: transfer-001, -004, -012, -014, -029, -033, -042, -045); where a turn's step
-        came before the lurch was caught, the robot walked off its reference into the table
-        and fell. Until 2026-12-05 a plan-chosen weight (0 up to a third of the torque
-        limits' static ratio, 1 from two thirds) gave light and medium loads the equal
-        share. Measured on the heavy scripts of seeds 46021, 48021, 49021 and 50021 (69
-        transfers of 4.5 kg and more, 26 walk-carries of 6.5 kg and more, 40 standing holds
-        of 9 kg and more, dynamic): 120 -> 125 of 135 succeed (+9 -4; every standing hold
-        both ways); on the whole envelope of fresh seed 51021: see the README."""
+        lift-off, and the hands pull it in at up to 0.55 m/s: its momentum's reaction ran
+        the robot's CoM forward at 0.2-0.75 m/s in every heavy transfer looked at (envelope
+        seed 50021: transfer-001, -004, -012, -014, -029, -033, -042, -045; the momenta of
+        robot and parcel from the logged joint positions, the ground's forward force under
+        20 N), with no toe margin left to stop it; where a turn's step came before the lurch
+        was caught, the robot walked off its reference into the table and fell. Until
+        2026-12-05 a plan-chosen weight (0 up to a third of the torque limits' static ratio,
+        1 from two thirds) gave light and medium loads the equal share. Measured on the
+        heavy scripts of seeds 46021, 48021, 49021 and 50021 (69 transfers of 4.5 kg and
+        more, 26 walk-carries of 6.5 kg and more, 40 standing holds of 9 kg and more,
+        dynamic): 120 -> 125 of 135 succeed (+9 -4; every standing hold both ways); on the
+        whole envelope of fresh seed 51021: see the README."""
         t = np.asarray(t_lead, dtype=float)
         out = np.full(t.shape, -1.0)
         for h in self.plan.holds:
