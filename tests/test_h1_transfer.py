@@ -3,9 +3,10 @@ simulation state: scenarios/h1-package-transfer.yaml holds the paper's result in
 (dynamic at least 1.0 s sooner than quasi-static with a smaller pick-to-drop yaw difference,
 both place the package, neither falls), scenarios/h1-pick-walk-drop.yaml places its box, and
 a pick during a right turn keeps its parcel level (tests/data/h1-pick-during-right-turn.yaml),
-and a box pulled in from full reach keeps the elbows on their nominal side
-(tests/data/h1-walk-carry-pull-in.yaml).
-About 45 s of wall time on two cores."""
+a box pulled in from full reach keeps the elbows on their nominal side
+(tests/data/h1-walk-carry-pull-in.yaml), and hands that reach past a high conveyor leave the
+parcel where it rests until they close on it (tests/data/h1-pick-past-a-high-conveyor.yaml).
+About 70 s of wall time on two cores."""
 
 from __future__ import annotations
 
@@ -122,4 +123,30 @@ def test_h1_pull_in_keeps_the_elbows_on_their_side(tmp_path: Path) -> None:
     assert max(elbows) < 1.45
     assert result.metrics["objects"]["box"]["on"] == "platform"
     assert result.metrics["peak_torque_ratio"] <= 1.0
+    assert result.metrics["passed"]
+
+
+def test_h1_hands_reaching_past_a_high_conveyor_leave_the_parcel_in_place(
+    tmp_path: Path,
+) -> None:
+    """H1 turns 143 deg past a conveyor at its tucked hands' height and picks during the turn
+    (H1 envelope seed 48027, transfer-033). Before the hand paths were ranked with the
+    next-nearest obstacle deciding a tie (`Clearance.better_than`), the left hand's reach went
+    through the parcel: it pushed the parcel 3.7 cm along the table, the grasp closed 4.2 cm
+    wide, the parcel rode tilted and fell off the conveyor. Now the parcel stays within 1 cm
+    of where it rests until the grasp closes (measured: it does not move) and ends on the
+    conveyor."""
+    path = Path(__file__).parent / "data" / "h1-pick-past-a-high-conveyor.yaml"
+    loaded = load_scenario_file(path)
+    scenario = loaded.scenario
+    result = run_scenario(scenario, loaded.text, RunOptions(out_dir=tmp_path))
+    assert not result.metrics["fell"]
+    (hold,) = result.plan.holds
+    rec = result.record
+    t = np.asarray(rec.t)
+    p_parcel = np.asarray(rec.object_positions["parcel"])
+    before = t < hold.grasp
+    moved = np.hypot(*(p_parcel[before, :2] - p_parcel[0, :2]).T)
+    assert np.max(moved) < 0.01
+    assert result.metrics["objects"]["parcel"]["on"] == "conveyor"
     assert result.metrics["passed"]

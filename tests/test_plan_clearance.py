@@ -11,6 +11,7 @@ from plan_fixtures import repo_scenario
 from locoplan.plan import compile_plan
 from locoplan.plan import constants as k
 from locoplan.plan.clearance import (
+    Clearance,
     Obstacle,
     base_pose,
     fixture_obstacle,
@@ -67,6 +68,34 @@ def test_a_track_through_an_object_has_negative_clearance() -> None:
     # at t = 0 it is 0.3 m from the surface, minus the hand sphere
     c0 = track_clearance(track, plan.trunk, (ball,), 0.0, 0.0, 0.0)
     assert c0.minimum == pytest.approx(0.3 - k.HAND_RADIUS, abs=EXACT)
+
+
+def test_per_obstacle_minima_and_the_tie_on_the_nearest() -> None:
+    """`by_obstacle` holds each obstacle's own smallest clearance (the same straight track past
+    a ball and through a second one: 0.3 m and minus the radius, less the hand sphere, to the
+    10 ms sampling); `better_than` compares the per-obstacle minima in increasing order, the
+    next one deciding where the nearest are within CLEARANCE_TIE."""
+    plan = compile_plan(repo_scenario("throw"))
+    obj = repo_scenario("throw").objects["ball"]
+    through = object_obstacle("ball", obj, (0.35, 0.0, 0.52), 0.0)
+    beside = object_obstacle("other", obj, (0.35, 0.0, 0.92), 0.0)  # 0.4 m above the line
+    start = HandWaypoint((0.35, 0.4, 0.52), "world")
+    end = HandWaypoint((0.35, -0.4, 0.52), "world")
+    track = make_track("L", default_waypoint(0), [HandSegment(0.0, 1.0, start, end, 0, "x")])
+    c = track_clearance(track, plan.trunk, (through, beside), 0.0, 1.0, 0.0)
+    assert c.by_obstacle[0] == pytest.approx(-0.1 - k.HAND_RADIUS, abs=2e-3)
+    assert c.by_obstacle[1] == pytest.approx(0.3 - k.HAND_RADIUS, abs=2e-3)
+    assert c.minimum == min(c.by_obstacle)
+
+    def clr(*by: float) -> Clearance:
+        return Clearance(min(by), 0.0, "", None, by)
+
+    tie = 0.5 * k.CLEARANCE_TIE
+    assert clr(-0.03, 0.05).better_than(clr(-0.04, 0.20))  # the nearest decides
+    assert clr(-0.03 - tie, 0.05).better_than(clr(-0.03, -0.02))  # a tie: the next decides
+    assert not clr(-0.03, -0.02).better_than(clr(-0.03 - tie, 0.05))
+    assert clr(0.05, -0.03).better_than(clr(-0.03 - tie, -0.02))  # in increasing order
+    assert not clr(-0.03, 0.05).better_than(clr(-0.03, 0.05))  # equal: not better
 
 
 def test_yaw_offsets_swing_trunk_waypoints_only() -> None:

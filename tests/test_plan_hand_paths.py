@@ -202,3 +202,34 @@ def test_a_reach_that_would_cut_the_objects_corner_goes_round_it() -> None:
         )
         assert gap.minimum >= GRASP_SPHERE_GAP - 0.002, (hand, gap)
     assert "slide" in [s.label for s in plan.manipulation.tracks[1].segments]
+
+
+PICK_PAST_A_HIGH_CONVEYOR = Path(__file__).parent / "data" / "h1-pick-past-a-high-conveyor.yaml"
+
+
+def test_an_obstacle_every_path_comes_near_does_not_hide_the_object() -> None:
+    """H1 turns 143 deg past a conveyor whose top is at the tucked hands' height: every path of
+    either hand comes inside the conveyor's margin as the trunk turns past it (the planned
+    trunk off by TRUNK_POSITION_ERROR), so none is clear. Ranked by the smallest clearance
+    alone, every path tied on the conveyor and the left hand's chosen reach went 3 cm into the
+    parcel (H1 envelope seed 48027, transfer-033: in MuJoCo it pushed the parcel 3.7 cm and
+    the grasp closed 4.2 cm wide). Ranked with the next-nearest obstacle deciding a tie
+    (`Clearance.better_than`), both hands' approaches keep APPROACH_CLEARANCE from the parcel
+    (measured 2.9 and 3.0 cm). Checked on the plan's own tracks, as the planner samples them."""
+    scenario = load_scenario(PICK_PAST_A_HIGH_CONVEYOR)
+    plan = compile_robot_plan(scenario)  # the script's robot: H1
+    spec = scenario.objects["parcel"]
+    parcel = object_obstacle("parcel", spec, tuple(spec.position), math.radians(spec.yaw))
+    conveyor = fixture_obstacle("conveyor", scenario.fixtures["conveyor"])
+    radius = plan.geometry.hand_radius
+    for hand in (0, 1):
+        track = plan.manipulation.tracks[hand]
+        t_reach = next(s.t0 for s in track.segments if s.task_index == 1 and s.label == "squeeze")
+        near = track_clearance(
+            track, plan.trunk, (conveyor,), 0.0, t_reach, -math.inf, hand_radius=radius
+        )
+        assert near.minimum < 0.0  # the case: inside the conveyor's margin
+        gap = track_clearance(
+            track, plan.trunk, (parcel,), 0.0, t_reach, -math.inf, hand_radius=radius
+        )
+        assert gap.minimum >= k.APPROACH_CLEARANCE - 1e-6, (hand, gap)

@@ -209,6 +209,11 @@ YAW_ERROR_MIN: Final = math.radians(0.5)
 # How far the trunk may be off its planned position when hand paths are checked (m): measured
 # 2-3 cm of drift while turning in place.
 TRUNK_POSITION_ERROR: Final = 0.02
+# Within how much (m) two candidate hand paths' clearances from their nearest obstacles count
+# as the same, so that the next-nearest decides (`clearance.Clearance.better_than`): a tenth
+# of the hands' tracking error (about 2 cm, APPROACH_CLEARANCE), well above the 1e-4 m that
+# two candidates differ by when the same part of their paths comes nearest.
+CLEARANCE_TIE: Final = 0.002
 # Sampling period of the clearance check (s).
 CLEARANCE_DT: Final = 0.01
 # Most samples one clearance check takes (`clearance.track_clearance`): a window longer than

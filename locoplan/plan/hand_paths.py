@@ -249,17 +249,18 @@ def approach_segments(
     tuck itself would pass too close). A hand that starts closer than APPROACH_CLEARANCE (resting
     beside the object) only has to get no closer (within APPROACH_SLACK).
 
-    If neither is clear, the one with the largest clearance wins, unless that one runs the
-    hand into something (a negative clearance) and an `entry` is given (a "world" point level
-    with the target, beside the near corner of the object the target is beside): then the same
-    paths are tried again going to `entry` first and sliding from there to `target` along the
-    object's side ("slide", `_entry_finish`), and the first clear one is taken. Only then and
-    only a clear one: an entry path adds a stop and takes time from the reach; tried whenever
-    no path was clear, it also replaced HECTOR's near-misses (1.9-2.5 cm from a box, against
-    the 2.5 cm asked) in five of the repository's scenarios and 101 of seed 16339's 280
-    manipulation runs (98 of them succeeded either way), and tried with entry paths that are
-    not clear either, one that came 3.4 cm into a platform instead of 4 cm made a run that
-    had placed its parcel fall (seed 16339, quasi-static transfer-007).
+    If neither is clear, the clearest one wins (the largest smallest clearance, ties within
+    CLEARANCE_TIE going to the larger next-smallest: `Clearance.better_than`), unless that one
+    runs the hand into something (a negative clearance) and an `entry` is given (a "world" point
+    level with the target, beside the near corner of the object the target is beside): then the
+    same paths are tried again going to `entry` first and sliding from there to `target` along
+    the object's side ("slide", `_entry_finish`), and the first clear one is taken. Only then
+    and only a clear one: an entry path adds a stop and takes time from the reach; tried
+    whenever no path was clear, it also replaced HECTOR's near-misses (1.9-2.5 cm from a box,
+    against the 2.5 cm asked) in five of the repository's scenarios and 101 of seed 16339's 280
+    manipulation runs (98 of them succeeded either way), and tried with entry paths that are not
+    clear either, one that came 3.4 cm into a platform instead of 4 cm made a run that had
+    placed its parcel fall (seed 16339, quasi-static transfer-007).
 
     Why the entry: in a pick during a turn, the object sweeps across the trunk frame while the
     hand reaches out, and a straight reach towards the point beside its far side cut through
@@ -331,11 +332,12 @@ def approach_segments(
     lifted = lifted_tuck_waypoint(hand, tuck_y, target, trunk, geo)
 
     def search(
-        via: HandWaypoint | None, best: list[HandSegment], best_gap: float
-    ) -> tuple[bool, list[HandSegment], float]:
+        via: HandWaypoint | None, best: list[HandSegment], best_c: Clearance, only_clear: bool
+    ) -> tuple[bool, list[HandSegment], Clearance]:
         """The tucked paths (tuck, rise close to the body, then `finish` by way of `via` from
-        the raised tuck): whether one is clear, that one or the best so far (`best`, with
-        clearance `best_gap`), and its clearance."""
+        the raised tuck): whether one is clear, that one or the clearest so far (`best`, with
+        clearance `best_c`; `Clearance.better_than`), and its clearance. `only_clear`: only a
+        clear path is wanted (the check of any other gives up below the threshold)."""
         t_tuck1 = t_tuck1_latest
         while True:
             t_tuck0 = max(t_free, t_tuck1 - tuck_time)
@@ -355,24 +357,31 @@ def approach_segments(
                     ),
                     *finish(t_r, lifted, via),
                 ]
-                c = gap(cand, t_tuck0, t_end, threshold, give_up_below=best_gap)
+                # A path whose nearest obstacle is nearer than the best one's by more than
+                # CLEARANCE_TIE cannot be better (nor one below the threshold a clear one):
+                # its check gives up there.
+                if only_clear:
+                    floor = min(threshold, default=0.0) - 1e-9
+                else:
+                    floor = best_c.minimum - k.CLEARANCE_TIE
+                c = gap(cand, t_tuck0, t_end, threshold, give_up_below=floor)
                 if c.first_below is None:
-                    return True, cand, c.minimum
-                if c.minimum > best_gap:
-                    best, best_gap = cand, c.minimum
+                    return True, cand, c
+                if not only_clear and c.better_than(best_c):
+                    best, best_c = cand, c
             if t_tuck0 <= t_free:
                 break
             t_tuck1 = max(t_tuck1 - k.TUCK_STEP, t_free + tuck_time)
-        return False, best, best_gap
+        return False, best, best_c
 
-    found, best, best_gap = search(None, direct, c_direct.minimum)
-    if found or entry is None or best_gap >= 0.0:
+    found, best, best_c = search(None, direct, c_direct, only_clear=False)
+    if found or entry is None or best_c.minimum >= 0.0:
         return best
     # By way of the entry: only a clear path replaces the best one.
     cand = finish(start, cur, entry)
     if gap(cand, t_free, t_end, threshold).first_below is None:
         return cand
-    found, via_entry, _ = search(entry, best, min(threshold, default=0.0) - 1e-9)
+    found, via_entry, _ = search(entry, best, best_c, only_clear=True)
     return via_entry if found else best
 
 
