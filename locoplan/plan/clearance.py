@@ -130,6 +130,7 @@ def track_clearance(
     dt: float = k.CLEARANCE_DT,
     give_up_below: float = -math.inf,
     hand_radius: float = k.HAND_RADIUS,
+    rival: Clearance | None = None,
 ) -> Clearance:
     """Clearance of the hand sphere (radius `hand_radius`, m) following `track` on [t0, t1] (s),
     sampled every `dt` (and at t1; coarser where that would take more than MAX_CLEARANCE_SAMPLES),
@@ -139,7 +140,11 @@ def track_clearance(
     mind. The check stops early once the clearance is below `give_up_below` (m; a search that only
     wants paths better than one it has); then `first_below` is only some time below the threshold,
     not the first. `threshold` (m) is one for every obstacle or one per obstacle (in the order of
-    `obstacles`)."""
+    `obstacles`). A `rival` (a path's clearance from the same obstacles): the check also stops,
+    with `first_below` set, once this path cannot be `better_than` it (fewer samples only
+    overstate each obstacle's minimum, so the order of the minima can only get worse), and it
+    samples the time of the rival's smallest clearance first: candidate paths often share that
+    part (the tucked hands passing an obstacle), and the tie there decides at once."""
     if not obstacles or t1 < t0:
         return Clearance(math.inf, t0, "", None, (math.inf,) * len(obstacles))
     limits = threshold if isinstance(threshold, tuple) else (threshold,) * len(obstacles)
@@ -150,7 +155,12 @@ def track_clearance(
     first: float | None = None
     # Latest first: a candidate path is usually closest where it reaches its target, so a
     # search that gives up below a clearance it already has stops soonest that way.
-    for i in range(n, -1, -1):
+    order = list(range(n, -1, -1))
+    if rival is not None and t0 <= rival.time <= t1:
+        lead = min(n, max(0, round((rival.time - t0) / dt)))
+        order.remove(lead)
+        order.insert(0, lead)
+    for i in order:
         t = min(t1, t0 + i * dt)
         below = False
         if yaw_offsets is None:
@@ -175,8 +185,13 @@ def track_clearance(
                     nearest[j] = d
                 if d < minimum:
                     minimum, when, what = d, t, ob.name
-        if below:
+        if below and (first is None or t < first):
             first = t
         if minimum < give_up_below:
             break
+        if rival is not None and minimum <= rival.minimum + k.CLEARANCE_TIE:
+            so_far = Clearance(minimum, when, what, first, tuple(nearest))
+            if not so_far.better_than(rival):
+                gave_up = t if first is None else first
+                return Clearance(minimum, when, what, gave_up, so_far.by_obstacle)
     return Clearance(minimum, when, what, first, tuple(nearest))

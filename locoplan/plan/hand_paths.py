@@ -205,10 +205,11 @@ def path_clearance(
     give_up_below: float = -math.inf,
     initial: HandWaypoint | None = None,
     geo: PlanGeometry = HECTOR_GEOMETRY,
+    rival: Clearance | None = None,
 ) -> Clearance:
     """Clearance on [t0, t1] (s) of the hand's track made of the segments `done` so far and
     the candidate segments `extra`, from the `initial` waypoint (default: the default pose;
-    see `track_clearance` for `give_up_below`)."""
+    see `track_clearance` for `give_up_below` and `rival`)."""
     start = default_waypoint(hand, geo) if initial is None else initial
     track = make_track(HAND_NAMES[hand], start, done + extra)
     return track_clearance(
@@ -220,6 +221,7 @@ def path_clearance(
         threshold,
         give_up_below=give_up_below,
         hand_radius=geo.hand_radius,
+        rival=rival,
     )
 
 
@@ -281,9 +283,10 @@ def approach_segments(
         threshold: float | tuple[float, ...],
         give_up_below: float = -math.inf,
         obs: tuple[Obstacle, ...] = obstacles,
+        rival: Clearance | None = None,
     ) -> Clearance:
         return path_clearance(
-            hand, done, extra, t0, t1, trunk, obs, threshold, give_up_below, first, geo
+            hand, done, extra, t0, t1, trunk, obs, threshold, give_up_below, first, geo, rival
         )
 
     def finish(t_r: float, frm: HandWaypoint, via: HandWaypoint | None) -> list[HandSegment]:
@@ -357,14 +360,12 @@ def approach_segments(
                     ),
                     *finish(t_r, lifted, via),
                 ]
-                # A path whose nearest obstacle is nearer than the best one's by more than
-                # CLEARANCE_TIE cannot be better (nor one below the threshold a clear one):
-                # its check gives up there.
+                # The check gives up where the path cannot be better than the best one (nor,
+                # when only a clear one will do, once it is below the threshold).
                 if only_clear:
-                    floor = min(threshold, default=0.0) - 1e-9
+                    c = gap(cand, t_tuck0, t_end, threshold, min(threshold, default=0.0) - 1e-9)
                 else:
-                    floor = best_c.minimum - k.CLEARANCE_TIE
-                c = gap(cand, t_tuck0, t_end, threshold, give_up_below=floor)
+                    c = gap(cand, t_tuck0, t_end, threshold, rival=best_c)
                 if c.first_below is None:
                     return True, cand, c
                 if not only_clear and c.better_than(best_c):
