@@ -17,6 +17,8 @@ from locoplan.plan.clearance import (
     fixture_obstacle,
     object_obstacle,
     track_clearance,
+    track_positions,
+    trunk_poses,
 )
 from locoplan.plan.hand_paths import default_waypoint
 from locoplan.plan.hands import HandSegment, HandWaypoint, make_track
@@ -68,6 +70,40 @@ def test_a_track_through_an_object_has_negative_clearance() -> None:
     # at t = 0 it is 0.3 m from the surface, minus the hand sphere
     c0 = track_clearance(track, plan.trunk, (ball,), 0.0, 0.0, 0.0)
     assert c0.minimum == pytest.approx(0.3 - k.HAND_RADIUS, abs=EXACT)
+
+
+def test_the_vectorised_track_trunk_and_distances_match_the_scalar_ones() -> None:
+    """`track_positions`, `trunk_poses` and `Obstacle.distances` (what `track_clearance`
+    evaluates every sample with at once) against `HandTrack.evaluate`, `TrunkPath.pose_at`
+    and `Obstacle.distance` one sample at a time, on the package transfer's plan (hands in
+    world and trunk frames, a turning trunk) at 400 times including before the first and
+    after the last segment, with the yaw off its plan by up to 0.2 rad: the same arithmetic
+    in the same order, so equal to float rounding (1e-12 m; numpy's cos and sin may differ
+    from math's in the last bit)."""
+    scenario = repo_scenario("package-transfer")
+    plan = compile_plan(scenario)
+    rng = np.random.default_rng(7)
+    ts = np.sort(rng.uniform(-0.5, plan.t_end + 0.5, 400))
+    x, y, yaw, wz = trunk_poses(plan.trunk, ts)
+    for i, t in enumerate(ts):
+        sx, sy, syaw, _, _, swz = plan.trunk.pose_at(float(t))
+        assert (x[i], y[i], yaw[i], wz[i]) == pytest.approx((sx, sy, syaw, swz), abs=EXACT)
+    off = rng.uniform(-0.2, 0.2, ts.size)
+    z = np.full_like(ts, plan.trunk.height)
+    obstacles = [fixture_obstacle(n, f) for n, f in scenario.fixtures.items()]
+    obstacles += [
+        object_obstacle(n, o, tuple(o.position), math.radians(o.yaw), (0.1, -0.05), 1.0)
+        for n, o in scenario.objects.items()
+    ]
+    for track in plan.manipulation.tracks:
+        p = track_positions(track, ts, x, y, z, np.cos(yaw + off), np.sin(yaw + off))
+        for i, t in enumerate(ts):
+            b = base_pose(plan.trunk, float(t), float(off[i]))
+            assert p[i] == pytest.approx(track.evaluate(float(t), b)[0], abs=EXACT)
+        for ob in obstacles:
+            d = ob.distances(p, ts)
+            for i, t in enumerate(ts):
+                assert d[i] == pytest.approx(ob.distance(tuple(p[i]), float(t)), abs=EXACT)
 
 
 def test_per_obstacle_minima_and_the_tie_on_the_nearest() -> None:
