@@ -11,6 +11,7 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 from plan_fixtures import hold_script, scenario_files, scenario_from_text
 from typer.testing import CliRunner
@@ -563,15 +564,15 @@ def test_a_fixture_a_million_km_away_is_refused_not_planned_forever(tmp_path: Pa
 
 def test_clearance_check_samples_a_long_segment_at_most_max_times() -> None:
     from locoplan.plan import constants as k
-    from locoplan.plan.clearance import Obstacle, track_clearance
+    from locoplan.plan.clearance import FloatArray, Obstacle, track_clearance
 
     plan = compile_plan(load_scenario(PACKAGE_TRANSFER))
     calls: list[float] = []
 
     class Counting(Obstacle):
-        def distance(self, p: tuple[float, float, float], t: float) -> float:
-            calls.append(t)
-            return 1.0
+        def distances(self, p: FloatArray, t: FloatArray) -> FloatArray:
+            calls.extend(t.tolist())
+            return np.ones(len(t))
 
     wall = Counting("wall", (5.0, 0.0, 0.5), (0.1, 0.1, 0.5), 0.0)
     track = plan.manipulation.tracks[0]
