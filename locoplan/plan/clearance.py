@@ -23,7 +23,7 @@ import numpy.typing as npt
 from locoplan.plan import constants as k
 from locoplan.plan.geometry import half_extents
 from locoplan.plan.hands import BasePose, HandTrack, HandWaypoint, Vec3
-from locoplan.plan.profiles import cruise_array, hermite_array
+from locoplan.plan.profiles import hermite_array
 from locoplan.plan.trunk import TrunkPath
 from locoplan.scenario.model import FixtureSpec, ObjectSpec
 
@@ -236,27 +236,10 @@ def track_clearance(
 def trunk_poses(
     trunk: TrunkPath, ts: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """`TrunkPath.pose_at` at the times ts (n,): x, y, yaw and yaw rate (m, rad, rad/s),
-    vectorised, each computed as `pose_at` computes it."""
-    segs = trunk.segments
-    x = np.full_like(ts, trunk.x_start)
-    y = np.full_like(ts, trunk.y_start)
-    yaw = np.full_like(ts, trunk.yaw_start)
-    wz = np.zeros_like(ts)
-    if not segs:
-        return x, y, yaw, wz
-    g = np.array([(s.t0, s.t1, s.x0, s.y0, s.yaw0, s.dx, s.dy, s.dyaw) for s in segs])
-    i = np.searchsorted(g[:, 0], ts, side="right") - 1
-    on = i >= 0
-    row = g[np.maximum(i, 0)]
-    dur = row[:, 1] - row[:, 0]
-    s, ds, _ = cruise_array((ts - row[:, 0]) / dur)
-    r = ds / dur
-    x = np.where(on, row[:, 2] + s * row[:, 5], x)
-    y = np.where(on, row[:, 3] + s * row[:, 6], y)
-    yaw = np.where(on, row[:, 4] + s * row[:, 7], yaw)
-    wz = np.where(on, r * row[:, 7], wz)
-    return x, y, yaw, wz
+    """`TrunkPath.pose_at` at the times ts (n,): x, y, yaw and yaw rate (m, rad, rad/s), from
+    the path's own vectorised `TrunkPath.evaluate` (the same arithmetic)."""
+    ref = trunk.evaluate(ts)
+    return ref.position[:, 0], ref.position[:, 1], ref.yaw, ref.yaw_rate
 
 
 def _waypoint_table(ws: list[HandWaypoint]) -> FloatArray:
