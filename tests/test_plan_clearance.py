@@ -132,17 +132,6 @@ def test_per_obstacle_minima_and_the_tie_on_the_nearest() -> None:
     assert not clr(-0.03, -0.02).better_than(clr(-0.03 - tie, 0.05))
     assert clr(0.05, -0.03).better_than(clr(-0.03 - tie, -0.02))  # in increasing order
     assert not clr(-0.03, 0.05).better_than(clr(-0.03, 0.05))  # equal: not better
-    # Against a rival, the check gives up (marked not clear) once it cannot be better, and is
-    # the whole check where it is better.
-    beaten = track_clearance(track, plan.trunk, (through, beside), 0.0, 1.0, -1.0, rival=c)
-    # a tie all the way: sampled to the end (the same minima), not better, so not clear
-    assert beaten.by_obstacle == c.by_obstacle and beaten.first_below is not None
-    stronger = clr(-0.05, 0.5)
-    lost = track_clearance(track, plan.trunk, (through, beside), 0.0, 1.0, -1.0, rival=stronger)
-    assert lost.first_below is not None and not lost.better_than(stronger)
-    weaker = clr(-0.2, 0.5)
-    won = track_clearance(track, plan.trunk, (through, beside), 0.0, 1.0, -1.0, rival=weaker)
-    assert won.by_obstacle == c.by_obstacle and won.better_than(weaker)
 
 
 def test_yaw_offsets_swing_trunk_waypoints_only() -> None:

@@ -150,21 +150,15 @@ def track_clearance(
     threshold: float | tuple[float, ...],
     yaw_offsets: tuple[float, ...] | None = None,
     dt: float = k.CLEARANCE_DT,
-    give_up_below: float = -math.inf,
     hand_radius: float = k.HAND_RADIUS,
-    rival: Clearance | None = None,
 ) -> Clearance:
     """Clearance of the hand sphere (radius `hand_radius`, m) following `track` on [t0, t1] (s),
     sampled every `dt` (and at t1; coarser where that would take more than MAX_CLEARANCE_SAMPLES),
     with the trunk on its planned path turned by each of `yaw_offsets` (rad; None: 0 and +-the
     expected yaw error, see the module docstring). The hand point moves at most about 2 m/s, so 10
     ms samples miss at most 2 cm of a path that grazes an edge; thresholds are chosen with that in
-    mind. The check stops early once the clearance is below `give_up_below` (m; a search that only
-    wants paths better than one it has); then `first_below` is only some time below the threshold,
-    not the first. `threshold` (m) is one for every obstacle or one per obstacle (in the order of
-    `obstacles`). A `rival` (a path's clearance from the same obstacles): a path that is not
-    `better_than` it is reported not clear (`first_below` set), as a search that wants only
-    paths better than the best it has needs. Every sample is evaluated at once with numpy
+    mind. `threshold` (m) is one for every obstacle or one per obstacle (in the order of
+    `obstacles`). Every sample is evaluated at once with numpy
     (`track_positions`, `trunk_poses`, `Obstacle.distances`): a search checks thousands of
     candidate paths (H1 envelope seed 48027, transfer-004: 4368), which one sample at a time
     took 60 s for one plan."""
@@ -175,10 +169,8 @@ def track_clearance(
     )
     n = min(max(1, math.ceil((t1 - t0) / dt - 1e-9)), k.MAX_CLEARANCE_SAMPLES)
     dt = max(dt, (t1 - t0) / n)
-    # The samples latest first, the order they were once checked in one by one (a candidate
-    # path is usually closest where it reaches its target, so a search that gives up below a
-    # clearance it already has stopped soonest that way). They are evaluated at once (numpy);
-    # where such a check stops is then found in that order, so the result is the same.
+    # The samples latest first (the order they were once checked in one by one): of equally near
+    # samples, the first in this order names the time and obstacle of the minimum.
     order = np.arange(n, -1, -1)
     ts = np.minimum(t1, t0 + order * dt)
     x, y, yaw, wz = trunk_poses(trunk, ts)
@@ -208,29 +200,15 @@ def track_clearance(
         gaps[:, :, o] = d - hand_radius - drift[:, None]
     flat = gaps.reshape(ts.size, -1)
     sample_min = flat.min(axis=1)
-    running = np.minimum.accumulate(sample_min)
-    nearest = np.minimum.accumulate(gaps.min(axis=1), axis=0)
+    nearest = gaps.min(axis=(0, 1))
     below: npt.NDArray[np.bool_] = np.asarray((gaps < limits).any(axis=(1, 2)))
-    stop = ts.size - 1
-    gave_up = np.flatnonzero(running < give_up_below)
-    if gave_up.size:
-        stop = int(gave_up[0])
-    # Against a rival: the samples taken one by one would give up at the first at which the
-    # minima so far cannot be better; fewer samples only overstate each minimum, so that
-    # happens (at the last sample at the latest) exactly when the whole check is not better.
-    beaten = False
-    if rival is not None and not gave_up.size:
-        whole = Clearance(float(running[stop]), 0.0, "", None, tuple(nearest[stop].tolist()))
-        beaten = not whole.better_than(rival)
-    minimum = float(running[stop])
-    at = int(np.argmax(sample_min[: stop + 1] == minimum)) if math.isfinite(minimum) else 0
+    minimum = float(sample_min.min())
+    at = int(np.argmax(sample_min == minimum)) if math.isfinite(minimum) else 0
     what = obstacles[int(flat[at].argmin()) % len(obstacles)].name if math.isfinite(minimum) else ""
     when = float(ts[at]) if math.isfinite(minimum) else t0
-    hit = ts[: stop + 1][below[: stop + 1]]
+    hit = ts[below]
     first: float | None = float(hit.min()) if hit.size else None
-    if beaten and first is None:
-        first = float(ts[stop])
-    return Clearance(minimum, when, what, first, tuple(nearest[stop].tolist()))
+    return Clearance(minimum, when, what, first, tuple(nearest.tolist()))
 
 
 def trunk_poses(

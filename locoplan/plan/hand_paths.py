@@ -202,14 +202,11 @@ def path_clearance(
     trunk: TrunkPath,
     obstacles: tuple[Obstacle, ...],
     threshold: float | tuple[float, ...],
-    give_up_below: float = -math.inf,
     initial: HandWaypoint | None = None,
     geo: PlanGeometry = HECTOR_GEOMETRY,
-    rival: Clearance | None = None,
 ) -> Clearance:
     """Clearance on [t0, t1] (s) of the hand's track made of the segments `done` so far and
-    the candidate segments `extra`, from the `initial` waypoint (default: the default pose;
-    see `track_clearance` for `give_up_below` and `rival`)."""
+    the candidate segments `extra`, from the `initial` waypoint (default: the default pose)."""
     start = default_waypoint(hand, geo) if initial is None else initial
     track = make_track(HAND_NAMES[hand], start, done + extra)
     return track_clearance(
@@ -219,9 +216,7 @@ def path_clearance(
         t0,
         t1,
         threshold,
-        give_up_below=give_up_below,
         hand_radius=geo.hand_radius,
-        rival=rival,
     )
 
 
@@ -281,13 +276,9 @@ def approach_segments(
         t0: float,
         t1: float,
         threshold: float | tuple[float, ...],
-        give_up_below: float = -math.inf,
         obs: tuple[Obstacle, ...] = obstacles,
-        rival: Clearance | None = None,
     ) -> Clearance:
-        return path_clearance(
-            hand, done, extra, t0, t1, trunk, obs, threshold, give_up_below, first, geo, rival
-        )
+        return path_clearance(hand, done, extra, t0, t1, trunk, obs, threshold, first, geo)
 
     def finish(t_r: float, frm: HandWaypoint, via: HandWaypoint | None) -> list[HandSegment]:
         """From `frm` at t_r to the target at t_end: straight, or by way of `via`."""
@@ -303,7 +294,7 @@ def approach_segments(
     threshold = tuple(
         min(
             k.APPROACH_CLEARANCE,
-            gap(direct, t_free, t_free, -math.inf, obs=(ob,)).minimum - k.APPROACH_SLACK,
+            gap(direct, t_free, t_free, -math.inf, (ob,)).minimum - k.APPROACH_SLACK,
         )
         for ob in obstacles
     )
@@ -339,8 +330,10 @@ def approach_segments(
     ) -> tuple[bool, list[HandSegment], Clearance]:
         """The tucked paths (tuck, rise close to the body, then `finish` by way of `via` from
         the raised tuck): whether one is clear, that one or the clearest so far (`best`, with
-        clearance `best_c`; `Clearance.better_than`), and its clearance. `only_clear`: only a
-        clear path is wanted (the check of any other gives up below the threshold)."""
+        clearance `best_c`; `Clearance.better_than`), and its clearance. `only_clear`: the first
+        clear path is wanted; otherwise only a clear path that is also `better_than` the best so
+        far ends the search (the rule of the one-sample-at-a-time check, which gave up on a
+        path once it could not be better; plans are as they were with it)."""
         t_tuck1 = t_tuck1_latest
         while True:
             t_tuck0 = max(t_free, t_tuck1 - tuck_time)
@@ -360,15 +353,11 @@ def approach_segments(
                     ),
                     *finish(t_r, lifted, via),
                 ]
-                # The check gives up where the path cannot be better than the best one (nor,
-                # when only a clear one will do, once it is below the threshold).
-                if only_clear:
-                    c = gap(cand, t_tuck0, t_end, threshold, min(threshold, default=0.0) - 1e-9)
-                else:
-                    c = gap(cand, t_tuck0, t_end, threshold, rival=best_c)
-                if c.first_below is None:
+                c = gap(cand, t_tuck0, t_end, threshold)
+                better = not only_clear and c.better_than(best_c)
+                if c.first_below is None and (only_clear or better):
                     return True, cand, c
-                if not only_clear and c.better_than(best_c):
+                if better:
                     best, best_c = cand, c
             if t_tuck0 <= t_free:
                 break
