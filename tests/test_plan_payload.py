@@ -469,6 +469,27 @@ def test_plan_prints_the_margins_and_writes_them_to_json(tmp_path: Path) -> None
     assert rows[0]["mass"] == 0.0 and rows[0]["reach_margin"] > 0.0
 
 
+NARROW_BOX_TO_A_HIGH_PLATFORM = Path(__file__).parent / "data" / "narrow-box-high-platform.yaml"
+
+
+def test_plan_says_how_far_short_the_hands_stop_of_a_pose_out_of_reach(tmp_path: Path) -> None:
+    """A box 0.114 m wide carried high enough to clear a 0.54 m platform (HECTOR envelope
+    seed 54021, transfer-054): the hands, 9.4 cm apart at the carry height, are 4.5 cm short
+    of it (shoulder roll), and `locoplan plan` says so next to the reach margin; a pose in
+    reach (the grasp) says nothing of the kind."""
+    path = _write(tmp_path, NARROW_BOX_TO_A_HIGH_PLATFORM.read_text())
+    js = tmp_path / "plan.json"
+    result = runner.invoke(app, ["plan", str(path), "--json", str(js)])
+    assert result.exit_code == 0, result.output
+    out = " ".join(result.output.split())
+    rows = {r["pose"]: r for r in json.loads(js.read_text())["payload"]}
+    carry = rows["carry"]["reach_margin"]
+    assert -0.06 < carry < -0.03
+    assert f"hands stop up to {-carry:.3f} m short of this pose" in out
+    assert rows["grasp"]["reach_margin"] > 0.0
+    assert out.count("short of this pose") == sum(r["reach_margin"] < 0 for r in rows.values())
+
+
 def test_plan_without_holds_prints_no_margins(tmp_path: Path) -> None:
     result = runner.invoke(app, ["plan", str(scenario_files()[0].parent / "turn.yaml")])
     assert result.exit_code == 0
