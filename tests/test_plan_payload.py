@@ -474,9 +474,10 @@ NARROW_BOX_TO_A_HIGH_PLATFORM = Path(__file__).parent / "data" / "narrow-box-hig
 
 def test_plan_says_how_far_short_the_hands_stop_of_a_pose_out_of_reach(tmp_path: Path) -> None:
     """A box 0.114 m wide carried high enough to clear a 0.54 m platform (HECTOR envelope
-    seed 54021, transfer-054): the hands, 9.4 cm apart at the carry height, are 4.5 cm short
-    of it (shoulder roll), and `locoplan plan` says so next to the reach margin; a pose in
-    reach (the grasp) says nothing of the kind."""
+    seed 54021, transfer-054): the hands, 9.4 cm apart at the carry height, are 2.5 cm short
+    of it (shoulder roll; 4.5 cm gripped above the box's centre, `centre_grips`), and
+    `locoplan plan` says so next to the reach margin; a pose in reach (the grasp) says
+    nothing of the kind."""
     path = _write(tmp_path, NARROW_BOX_TO_A_HIGH_PLATFORM.read_text())
     js = tmp_path / "plan.json"
     result = runner.invoke(app, ["plan", str(path), "--json", str(js)])
@@ -484,10 +485,66 @@ def test_plan_says_how_far_short_the_hands_stop_of_a_pose_out_of_reach(tmp_path:
     out = " ".join(result.output.split())
     rows = {r["pose"]: r for r in json.loads(js.read_text())["payload"]}
     carry = rows["carry"]["reach_margin"]
-    assert -0.06 < carry < -0.03
+    assert -0.035 < carry < -0.015
     assert f"hands stop up to {-carry:.3f} m short of this pose" in out
     assert rows["grasp"]["reach_margin"] > 0.0
     assert out.count("short of this pose") == sum(r["reach_margin"] < 0 for r in rows.values())
+
+
+def _carry_clearance_left(plan: Plan, path: Path) -> float:
+    """How far (m) the carried box of the one hold of `plan` (its scenario at `path`) passes
+    over the highest fixture it sweeps over, held where the hands stop (the carry pose's
+    height less its reach shortfall, `StaticPostures.arms`)."""
+    scenario = load_scenario(path)
+    (hold,) = plan.holds
+    model = static_model(scenario.robot)
+    (carry,) = [p for p in planned_holds(plan, model) if p.kind == "carry"]
+    _, _, reach = model.postures.arms(carry.pose)
+    z = sum(p[2] for p in carry.pose.p_hands_trunk) / 2
+    half_z = scenario.objects[hold.object].size[2] / 2
+    return plan.trunk.height + z - hold.grip_height - half_z + min(reach, 0.0) - hold.carry_top
+
+
+def test_a_narrow_box_carried_over_a_high_target_is_gripped_at_its_centre(
+    tmp_path: Path,
+) -> None:
+    """`payload.centre_grips`: the narrow box that must clear a 0.54 m platform is gripped at
+    its centre, so that held where the arms stop it still passes over the platform (by more
+    than the 1 cm it lacked gripped 4 cm above its centre); the same box carried to a
+    0.40 m platform, in reach, keeps its grip above the centre (a pendulum that hangs
+    level)."""
+    plan = compile_plan(load_scenario(NARROW_BOX_TO_A_HIGH_PLATFORM))
+    (hold,) = plan.holds
+    assert hold.grip_height == 0.0 and hold.carry_top == pytest.approx(0.54)
+    assert _carry_clearance_left(plan, NARROW_BOX_TO_A_HIGH_PLATFORM) > 0.01
+    low = _write(
+        tmp_path,
+        NARROW_BOX_TO_A_HIGH_PLATFORM.read_text().replace("0.444, 0.54]", "0.444, 0.40]"),
+    )
+    (kept,) = compile_plan(load_scenario(low)).holds
+    assert kept.grip_height > 0.0
+
+
+@pytest.mark.closed_loop
+def test_a_narrow_box_carried_over_a_high_target_is_placed_in_mujoco(tmp_path: Path) -> None:
+    """Closed loop (dynamic: the drop starts in the turn towards the platform): the box
+    reaches the platform and stays on it (gripped above its centre it came down on the
+    platform's edge 0.4 s before the drop and was left there)."""
+    path = _write(
+        tmp_path,
+        NARROW_BOX_TO_A_HIGH_PLATFORM.read_text()
+        + "expect: {no_fall: true, max_torque_ratio: 1.0, placed: {parcel: platform}}\n",
+    )
+    metrics_path = tmp_path / "metrics.json"
+    result = runner.invoke(
+        app,
+        ["run", str(path), "--out", str(tmp_path / "runs"), "--metrics-json", str(metrics_path)],
+    )
+    assert result.exit_code == 0, result.output
+    metrics = json.loads(metrics_path.read_text())
+    assert not metrics["fell"] and metrics["peak_torque_ratio"] <= 1.0
+    assert metrics["objects"]["parcel"]["on"] == "platform"
+    assert not metrics["objects"]["parcel"]["held"]
 
 
 def test_plan_without_holds_prints_no_margins(tmp_path: Path) -> None:

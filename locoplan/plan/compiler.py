@@ -13,6 +13,7 @@ from locoplan.plan.footholds import build_footholds
 from locoplan.plan.gait import FOOT_NAMES, build_contact_schedule
 from locoplan.plan.manipulation import build_manipulation
 from locoplan.plan.payload import (
+    centre_grips,
     check_grasp_reach,
     check_payload,
     check_place_reach,
@@ -75,6 +76,7 @@ def compile_plan(
             )
 
     base_notes: tuple[str, ...] = ()
+    grips: frozenset[str] = frozenset()
 
     def build(planned: tuple[PlannedTask, ...], notes: tuple[str, ...] = ()) -> Plan:
         return _assemble(
@@ -85,12 +87,16 @@ def compile_plan(
             end_shift,
             geometry,
             base_notes + notes,
+            grips,
         )
 
     plan = build(tasks)
     waited, base_notes = _wait_for_heavy_lifts(scenario, tasks, plan, geometry)
     if waited != tasks:
         tasks = waited
+        plan = build(tasks)
+    grips = centre_grips(plan, scenario)
+    if grips:
         plan = build(tasks)
     try:
         check_grasp_reach(plan, scenario.robot)
@@ -113,9 +119,10 @@ def _assemble(
     end_shift: float,
     geometry: PlanGeometry,
     notes: tuple[str, ...] = (),
+    centre_grips: frozenset[str] = frozenset(),
 ) -> Plan:
     """The plan of `tasks` (planned, re-timed for `strategy`), before the reach and payload
-    checks."""
+    checks; `centre_grips`: objects gripped at their centre (`payload.centre_grips`)."""
     contacts = build_contact_schedule(tasks, scenario.gait.period, scenario.gait.swing)
     start = scenario.robot_start
     trunk = build_trunk_path(
@@ -126,7 +133,9 @@ def _assemble(
     # Only a plan that holds something needs the robot's statics (the payload check loads
     # the same cached model): about 1 s in a fresh process, which locomotion need not pay.
     leg_torque = _leg_torque(scenario.robot) if scenario.objects else math.inf
-    manipulation = build_manipulation(tasks, scenario, trunk, swings, leg_torque, geometry)
+    manipulation = build_manipulation(
+        tasks, scenario, trunk, swings, leg_torque, geometry, centre_grips
+    )
 
     # Drops and throws are done by the hands that picked the object.
     hand_words = {("L", "R"): "both", ("L",): "left", ("R",): "right"}

@@ -90,7 +90,8 @@ class ObjectHold:
     its weight acts on the robot (sigma_e); `release` (s): the hands let go (inf: held to the
     end). `hands`: "L"/"R" names. `half_width` (m): half the object's width across the grip;
     `yaw_in_grasp` (rad): object yaw minus approach yaw at the pick; `grip_height` (m): how far
-    above the object's centre the hands hold it. `pre_lean` (m): how far the
+    above the object's centre the hands hold it; `carry_top` (m): the highest fixture top the
+    object sweeps over while carried (`_Builder.carry_top`, 0 if none). `pre_lean` (m): how far the
     trunk may stand back from the object at the lift-off with the arms still reaching its grip
     points (`locoplan.plan.payload.pre_lean_room`): where a foot steps within a second of
     the lift-off, the controller leans back before the load comes on by the equal-margin
@@ -109,6 +110,7 @@ class ObjectHold:
     half_width: float
     yaw_in_grasp: float
     grip_height: float = 0.0
+    carry_top: float = 0.0
     pre_lean: float = 0.0
 
 
@@ -167,6 +169,7 @@ class _OpenHold:
     half_width: float
     yaw_in_grasp: float
     grip_height: float
+    carry_top: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -217,6 +220,9 @@ class _Builder:
     retreat_end: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     # The robot's figures (hand poses, hand radius, carry distance, trunk front).
     geom: PlanGeometry = HECTOR_GEOMETRY
+    # Objects gripped at their centre although carried through locomotion (the compiler's
+    # `payload.centre_grips`: their carry pose is out of the arms' reach).
+    centre_grips: frozenset[str] = frozenset()
     initial: tuple[HandWaypoint, HandWaypoint] = field(
         default_factory=lambda: (default_waypoint(0), default_waypoint(1))
     )
@@ -374,7 +380,7 @@ class _Builder:
         depth = support_half_width(obj, oyaw, ax, ay)
         obstacles = self.obstacles()
         geom = self.geom
-        lift = grip_height(obj, geom) if moving else 0.0
+        lift = grip_height(obj, geom) if moving and name not in self.centre_grips else 0.0
         gz = oz + lift
         forward = carry_forward(self.trunk.pose_at(task.end), ox, oy, geom)
         # Carried through locomotion: in to `carry_in` (hand_paths). The raise pulls it in
@@ -407,6 +413,7 @@ class _Builder:
         # Then, for an object held standing, while the hands have nothing else to do (until
         # t_settle), it comes in to CARRY_FORWARD slowly enough not to set it swinging.
         carry_z = self._carry_height(task, obj, forward, gz + phases.raise_height, lift)
+        swept = self.carry_top(task, obj, forward)
         for h in hands:
             side = SIDE[h]
             pre = beside((ox, oy, gz), side * (half + self.geom.grasp_clearance), lx, ly)
@@ -464,7 +471,16 @@ class _Builder:
             self.hand_holds[h] = name
             self.active[h].append((min(task.start, approach[0].t0), t_end))
         self.open_holds[name] = _OpenHold(
-            name, obj.mass, hands, task, t_contact, t_lift, half, oyaw - math.atan2(ay, ax), lift
+            name,
+            obj.mass,
+            hands,
+            task,
+            t_contact,
+            t_lift,
+            half,
+            oyaw - math.atan2(ay, ax),
+            lift,
+            swept,
         )
         self.events.append(PlanEvent(t_contact, "grasp", task.index, name))
         self.events.append(PlanEvent(t_lift, "lift", task.index, name))
@@ -610,6 +626,7 @@ class _Builder:
                 hold.half_width,
                 hold.yaw_in_grasp,
                 hold.grip_height,
+                hold.carry_top,
             )
         )
         for h in hold.hands:
@@ -870,6 +887,7 @@ class _Builder:
                     hold.half_width,
                     hold.yaw_in_grasp,
                     hold.grip_height,
+                    hold.carry_top,
                 )
             )
             for h in hold.hands:
@@ -915,10 +933,12 @@ def build_manipulation(
     swings: tuple[tuple[float, float], ...] = (),
     leg_torque: float = math.inf,
     geom: PlanGeometry = HECTOR_GEOMETRY,
+    centre_grips: frozenset[str] = frozenset(),
 ) -> ManipulationPlan:
     """Hand tracks, contacts, object holds and targets for the sorted planned tasks;
     `swings`: the planned foot swings (lift-off, touchdown; s), both feet; `leg_torque`: the
-    weakest leg joint's torque limit (N m); `geom`: the robot's figures."""
+    weakest leg joint's torque limit (N m); `geom`: the robot's figures; `centre_grips`: the
+    objects to grip at their centre even when carried through locomotion."""
     shift = max((t.shift for t in tasks), default=0.0)
     b = _Builder(
         scenario,
@@ -928,6 +948,7 @@ def build_manipulation(
         swings=swings,
         leg_torque=leg_torque,
         geom=geom,
+        centre_grips=centre_grips,
     )
     for task in tasks:
         if task.action == "pick":

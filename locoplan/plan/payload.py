@@ -42,6 +42,7 @@ import numpy as np
 from locoplan.exceptions import RobotDescriptionError
 from locoplan.plan import constants as k
 from locoplan.plan.errors import InfeasiblePlanError, PlanError
+from locoplan.plan.geometry import half_extents
 from locoplan.plan.hands import HandSegment, Vec3
 from locoplan.plan.manipulation import HAND_NAMES, ObjectHold
 from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
@@ -54,7 +55,7 @@ if TYPE_CHECKING:
 
     from locoplan.plan.plan import Plan
     from locoplan.plan.statics import HeldPose, StaticAnalysis, StaticModel
-    from locoplan.scenario.model import FixtureSpec
+    from locoplan.scenario.model import FixtureSpec, Scenario
 
 PoseKind = Literal["grasp", "carry", "place"]
 
@@ -213,6 +214,48 @@ def with_pre_leans(plan: Plan, robot: str) -> Plan:
         room = pre_lean_room(model, grasp.pose) if grasp is not None else 0.0
         holds.append(replace(hold, pre_lean=room))
     return replace(plan, manipulation=replace(plan.manipulation, holds=tuple(holds)))
+
+
+def centre_grips(plan: Plan, scenario: Scenario) -> frozenset[str]:
+    """The objects of `plan` (compiled from `scenario`) to grip at their centre instead of
+    `grip_height` above it: those gripped above their centre whose carry pose the arms cannot
+    reach (reach margin r < 0, `StaticPostures.arms`) and which, held where the hands stop,
+    r short, would pass within CENTRE_GRIP_CLEARANCE of the highest fixture they sweep over
+    (`ObjectHold.carry_top`), or into it.
+
+    Why: a narrow box keeps the hands close together, and HECTOR's three-joint arms cannot
+    bring them close together high up (shoulder roll): with the hands 9.4 cm apart the carry
+    pose 0.13 m above the trunk origin is 4.5 cm out of reach, 0.09 m above it 2.5 cm. Boxes
+    0.11-0.12 m wide carried over a 0.52-0.54 m target rode 3.0-4.5 cm under their plan,
+    their bottom at the target's top, and in the dynamic strategy (the drop in the turn
+    towards the target) three were left on the target's edge and not placed (envelope seeds
+    53021, 54021, 55021: transfer-043, -054, -039, predicted 1.3 cm into the target to 0.2 cm
+    over it; the quasi-static runs of the same plans cleared the edges by a few mm). Gripped
+    at its centre the box is carried as high with the hands `grip_height` lower, where the
+    arms reach nearer; those three then place their parcels, and the other 15 runs of those
+    seeds that the rule changes succeed as before. Only these objects: gripping at its centre
+    every object whose carry pose is out of reach and whose carry height a swept fixture sets
+    (127 scripts of those seeds, 254 runs) also lost 4 runs, objects predicted 1.7-3.5 cm
+    clear (53021 walk-carry-017 and 54021 transfer-020 fell, 55021 transfer-006 missed its
+    grasp), and gained one more (55021 transfer-057, 2.5 cm)."""
+    if not plan.holds:
+        return frozenset()
+    model: StaticModel | None = None
+    out = set()
+    for hold in plan.holds:
+        if hold.grip_height <= 0.0 or hold.carry_top <= 0.0:
+            continue
+        model = model or _model(scenario.robot)
+        half_z = half_extents(scenario.objects[hold.object])[2]
+        for pose in _hold_poses(plan, hold, model):
+            if pose.kind != "carry":
+                continue
+            _, _, reach = model.postures.arms(pose.pose)
+            z = sum(p[2] for p in pose.pose.p_hands_trunk) / len(pose.pose.p_hands_trunk)
+            bottom = plan.trunk.height + z - hold.grip_height - half_z
+            if reach < 0.0 and bottom + reach - hold.carry_top < k.CENTRE_GRIP_CLEARANCE:
+                out.add(hold.object)
+    return frozenset(out)
 
 
 def pre_lean_room(model: StaticModel, pose: HeldPose) -> float:
