@@ -164,6 +164,8 @@ CARRY_IN_GAP: Final = 0.03
 # whose box, carried 4 cm above the platform's top as planned, hit that platform's edge and
 # stopped the walk 12 cm short). `manipulation.carry_clearance` gives the sum.
 CARRY_CLEARANCE: Final = 0.04
+CARRY_SAG_PER_KG: Final = 0.004
+CARRY_SAG_FROM: Final = 5.0
 # How near (m) to a fixture it sweeps over a carried object may come, held where the arms
 # stop short of an out-of-reach carry pose, before it is gripped at its centre
 # (`payload.centre_grips`): the spread of the sag that the arms' shortfall predicts (HECTOR,
@@ -172,8 +174,6 @@ CARRY_CLEARANCE: Final = 0.04
 # gripped at their centre, those predicted 1.3 cm in to 0.2 cm clear better) and then on
 # 51021 and 52021 (README, Envelope).
 CENTRE_GRIP_CLEARANCE: Final = 0.01
-CARRY_SAG_PER_KG: Final = 0.004
-CARRY_SAG_FROM: Final = 5.0
 # Trunk-path sampling step (s) when looking for the fixtures a held object sweeps over.
 SWEEP_SAMPLE: Final = 0.05
 # HECTOR's pre-grasp clearance outside the object's sides (m; `PlanGeometry.grasp_clearance`: the
