@@ -10,6 +10,7 @@ import math
 import re
 import shutil
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -265,6 +266,23 @@ def test_plan_prints_what_the_planner_changed(tmp_path: Path) -> None:
     assert "so that the trunk faces 'parcel' at its lift-off" in " ".join(result.output.split())
 
 
+def _run_placing_the_parcel(tmp_path: Path, path: Path) -> tuple[str, dict[str, Any]]:
+    """`locoplan run` on the script at `path`: it exits 0 with the robot standing, no joint
+    past its torque limit and 'parcel' released onto 'platform' (MuJoCo's state, as the run's
+    metrics report it). The run's output and metrics, for what a test asserts beyond that."""
+    metrics_path = tmp_path / "metrics.json"
+    result = runner.invoke(
+        app,
+        ["run", str(path), "--out", str(tmp_path / "runs"), "--metrics-json", str(metrics_path)],
+    )
+    assert result.exit_code == 0, result.output
+    metrics = json.loads(metrics_path.read_text())
+    assert not metrics["fell"] and metrics["peak_torque_ratio"] <= 1.0
+    assert metrics["objects"]["parcel"]["on"] == "platform"
+    assert not metrics["objects"]["parcel"]["held"]
+    return result.output, metrics
+
+
 @pytest.mark.closed_loop
 def test_a_hurried_turn_picks_and_places_in_mujoco(tmp_path: Path) -> None:
     """Closed loop: the script that the planner used to refuse runs, says what the planner
@@ -275,18 +293,9 @@ def test_a_hurried_turn_picks_and_places_in_mujoco(tmp_path: Path) -> None:
         EARLY_TURNING_PICK % "1.94"
         + "expect: {no_fall: true, max_torque_ratio: 1.0, placed: {parcel: platform}}\n",
     )
-    metrics_path = tmp_path / "metrics.json"
-    result = runner.invoke(
-        app,
-        ["run", str(path), "--out", str(tmp_path / "runs"), "--metrics-json", str(metrics_path)],
-    )
-    assert result.exit_code == 0, result.output
-    assert "planner: the turn by 145 deg from 0.00 s ends at " in result.output
-    metrics = json.loads(metrics_path.read_text())
+    output, metrics = _run_placing_the_parcel(tmp_path, path)
+    assert "planner: the turn by 145 deg from 0.00 s ends at " in output
     assert len(metrics["planner_notes"]) == 1
-    assert not metrics["fell"] and metrics["peak_torque_ratio"] <= 1.0
-    assert metrics["objects"]["parcel"]["on"] == "platform"
-    assert not metrics["objects"]["parcel"]["held"]
 
 
 # A transfer whose drop (start %s s) releases the parcel long before its 171 deg turn ends
@@ -360,17 +369,8 @@ def test_a_hurried_turn_places_on_the_target_in_mujoco(tmp_path: Path) -> None:
     """Closed loop: the script that the planner used to refuse runs, and the parcel ends on
     the platform with the robot standing (MuJoCo's state, as the run's metrics report it)."""
     path = _write(tmp_path, TURNING_DROP % "4.28", "drop.yaml")
-    metrics_path = tmp_path / "metrics.json"
-    result = runner.invoke(
-        app,
-        ["run", str(path), "--out", str(tmp_path / "runs"), "--metrics-json", str(metrics_path)],
-    )
-    assert result.exit_code == 0, result.output
-    metrics = json.loads(metrics_path.read_text())
+    _, metrics = _run_placing_the_parcel(tmp_path, path)
     assert metrics["planner_notes"][0].endswith("so that the trunk faces 'platform' at the release")
-    assert not metrics["fell"] and metrics["peak_torque_ratio"] <= 1.0
-    assert metrics["objects"]["parcel"]["on"] == "platform"
-    assert not metrics["objects"]["parcel"]["held"]
 
 
 def test_validate_plan_run_and_compare_refuse_with_file_line_column(tmp_path: Path) -> None:
@@ -535,16 +535,7 @@ def test_a_narrow_box_carried_over_a_high_target_is_placed_in_mujoco(tmp_path: P
         NARROW_BOX_TO_A_HIGH_PLATFORM.read_text()
         + "expect: {no_fall: true, max_torque_ratio: 1.0, placed: {parcel: platform}}\n",
     )
-    metrics_path = tmp_path / "metrics.json"
-    result = runner.invoke(
-        app,
-        ["run", str(path), "--out", str(tmp_path / "runs"), "--metrics-json", str(metrics_path)],
-    )
-    assert result.exit_code == 0, result.output
-    metrics = json.loads(metrics_path.read_text())
-    assert not metrics["fell"] and metrics["peak_torque_ratio"] <= 1.0
-    assert metrics["objects"]["parcel"]["on"] == "platform"
-    assert not metrics["objects"]["parcel"]["held"]
+    _run_placing_the_parcel(tmp_path, path)
 
 
 def test_plan_without_holds_prints_no_margins(tmp_path: Path) -> None:
