@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 
 from locoplan.plan.clearance import fixture_obstacle
@@ -18,6 +18,7 @@ from locoplan.plan.payload import (
     check_payload,
     check_place_reach,
     planned_grasp,
+    reachable_hovers,
     with_pre_leans,
 )
 from locoplan.plan.plan import Plan
@@ -78,7 +79,11 @@ def compile_plan(
     base_notes: tuple[str, ...] = ()
     grips: frozenset[str] = frozenset()
 
-    def build(planned: tuple[PlannedTask, ...], notes: tuple[str, ...] = ()) -> Plan:
+    def build(
+        planned: tuple[PlannedTask, ...],
+        notes: tuple[str, ...] = (),
+        hovers: Mapping[int, float] | None = None,
+    ) -> Plan:
         return _assemble(
             scenario,
             strategy,
@@ -88,6 +93,7 @@ def compile_plan(
             geometry,
             base_notes + notes,
             grips,
+            hovers,
         )
 
     plan = build(tasks)
@@ -107,8 +113,30 @@ def compile_plan(
     except InfeasiblePlanError as exc:
         # The notes of this plan beyond the heavy lifts' (a hurried pick's) stay.
         plan = _face_the_drop(scenario, plan, plan.notes[len(base_notes) :], exc, build, geometry)
+    plan = _hover_within_reach(plan, scenario, build, base_notes)
     check_payload(plan, scenario.robot)
     return with_pre_leans(plan, scenario.robot)
+
+
+def _hover_within_reach(
+    plan: Plan,
+    scenario: Scenario,
+    build: Callable[[tuple[PlannedTask, ...], tuple[str, ...], Mapping[int, float]], Plan],
+    base_notes: tuple[str, ...],
+) -> Plan:
+    """`plan` with its drops' hovers ending where the arms reach them
+    (`payload.reachable_hovers`), once the turns that the reach checks hurried are in it (a
+    drop whose release the arms miss is mended by hurrying its turn, `_face_the_drop`, not
+    by a later release). The plan as it was if the later release would miss its place."""
+    hovers = reachable_hovers(plan, scenario.robot)
+    if not hovers:
+        return plan
+    later = build(plan.tasks, plan.notes[len(base_notes) :], hovers)
+    try:
+        check_place_reach(later, scenario.robot, scenario.fixtures)
+    except InfeasiblePlanError:
+        return plan
+    return later
 
 
 def _assemble(
@@ -120,9 +148,11 @@ def _assemble(
     geometry: PlanGeometry,
     notes: tuple[str, ...] = (),
     centre_grips: frozenset[str] = frozenset(),
+    hover_ends: Mapping[int, float] | None = None,
 ) -> Plan:
     """The plan of `tasks` (planned, re-timed for `strategy`), before the reach and payload
-    checks; `centre_grips`: objects gripped at their centre (`payload.centre_grips`)."""
+    checks; `centre_grips`: objects gripped at their centre (`payload.centre_grips`);
+    `hover_ends`: the earliest end of the drops' hovers (`payload.reachable_hovers`)."""
     contacts = build_contact_schedule(tasks, scenario.gait.period, scenario.gait.swing)
     start = scenario.robot_start
     trunk = build_trunk_path(
@@ -134,7 +164,7 @@ def _assemble(
     # the same cached model): about 1 s in a fresh process, which locomotion need not pay.
     leg_torque = _leg_torque(scenario.robot) if scenario.objects else math.inf
     manipulation = build_manipulation(
-        tasks, scenario, trunk, swings, leg_torque, geometry, centre_grips
+        tasks, scenario, trunk, swings, leg_torque, geometry, centre_grips, hover_ends
     )
 
     # Drops and throws are done by the hands that picked the object.

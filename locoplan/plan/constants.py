@@ -174,6 +174,13 @@ CARRY_SAG_FROM: Final = 5.0
 # gripped at their centre, those predicted 1.3 cm in to 0.2 cm clear better) and then on
 # 51021 and 52021 (README, Envelope).
 CENTRE_GRIP_CLEARANCE: Final = 0.01
+# How far (m) the arms may fall short of a drop's hover pose before the hover ends later
+# (`payload.reachable_hovers`): an object held where the hands stop rides up to that much
+# lower (the carry's measured sag, above), and the hover keeps it DROP_HOVER_HEIGHT over the
+# target's top; so it still clears the top by CENTRE_GRIP_CLEARANCE.
+HOVER_REACH_SLACK: Final = DROP_HOVER_HEIGHT - CENTRE_GRIP_CLEARANCE
+# The time grid (s) on which `payload.reachable_hovers` looks for a reachable hover.
+HOVER_SEARCH_STEP: Final = 0.02
 # Trunk-path sampling step (s) when looking for the fixtures a held object sweeps over.
 SWEEP_SAMPLE: Final = 0.05
 # HECTOR's pre-grasp clearance outside the object's sides (m; `PlanGeometry.grasp_clearance`: the

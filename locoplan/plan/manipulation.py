@@ -30,6 +30,7 @@ themselves (approach, retreat, throw line) are `locoplan.plan.hand_paths`. Geome
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -223,6 +224,9 @@ class _Builder:
     # Objects gripped at their centre although carried through locomotion (the compiler's
     # `payload.centre_grips`: their carry pose is out of the arms' reach).
     centre_grips: frozenset[str] = frozenset()
+    # The earliest end (s) of each drop's hover, by the drop's task index (the compiler's
+    # `payload.reachable_hovers`: where the hover as timed is out of the arms' reach).
+    hover_ends: Mapping[int, float] = field(default_factory=dict)
     initial: tuple[HandWaypoint, HandWaypoint] = field(
         default_factory=lambda: (default_waypoint(0), default_waypoint(1))
     )
@@ -642,8 +646,14 @@ class _Builder:
         name = hold.obj
         t_hover = task.at_fraction(k.DROP_HOVER_END)
         t_release = task.at_fraction(k.DROP_RELEASE)
+        earliest = self.hover_ends.get(task.index, -math.inf)
+        if earliest > t_hover:
+            # The lowering keeps its share of the window, within the window.
+            lowering = t_release - t_hover
+            t_hover = min(earliest, task.end - lowering)
+            t_release = max(t_release, t_hover + lowering)
         geo = self._drop_geometry(task, hold, t_hover, t_release)
-        timed = self._drop_times(task, hold, geo, t_hover, t_release)
+        timed = self._drop_times(task, hold, geo, t_hover, t_release, earliest)
         if timed != (t_hover, t_release):
             t_hover, t_release = timed
             geo = self._drop_geometry(task, hold, t_hover, t_release)
@@ -704,14 +714,16 @@ class _Builder:
         geo: _DropGeometry,
         t_hover: float,
         t_release: float,
+        earliest: float = -math.inf,
     ) -> tuple[float, float]:
-        """The hover's end and the release (s) of a drop: DROP_HOVER_END and DROP_RELEASE of
-        its window, unless the lowering between them would accelerate the load faster than
-        `pull_accel` allows for its mass (the arms' and the object's reaction on the trunk
-        held to HAND_ACCEL_LIMIT's force, as for a pull-in). Then the lowering takes the time
-        it needs from the hover, down to the hover's own need at that acceleration, and then
-        from after DROP_RELEASE, up to the drop's end; a window too short for both shares
-        itself between them in proportion to their needs.
+        """The hover's end and the release (s) of a drop: `t_hover` and `t_release` (from
+        DROP_HOVER_END and DROP_RELEASE of its window), unless the lowering between them would
+        accelerate the load faster than `pull_accel` allows for its mass (the arms' and the
+        object's reaction on the trunk held to HAND_ACCEL_LIMIT's force, as for a pull-in).
+        Then the lowering takes the time it needs from the hover, down to the hover's own
+        need at that acceleration and not before `earliest` (`hover_ends`), and then from
+        after `t_release`, up to the drop's end; a window too short for both shares itself
+        between them in proportion to their needs.
 
         Why: at fixed fractions, a lowering from a hover raised to clear the table passed on
         the way (11 cm) in 0.13 s accelerated a 5.6 kg box at 37 m/s^2, and 4 cm in 0.12 s at
@@ -733,9 +745,9 @@ class _Builder:
                 start = world_to_trunk(self.trunk, task.start, start)
             end = world_to_trunk(self.trunk, t_hover, geo.points[h][1])
             hover_need = max(hover_need, rest_to_rest_duration(math.dist(start, end), accel))
-        hover_end = max(task.start + hover_need, t_release - lower)
+        hover_end = max(task.start + hover_need, t_release - lower, min(earliest, t_hover))
         release = min(task.end, max(t_release, hover_end + lower))
-        if release - hover_end < lower:
+        if release - hover_end < lower - 1e-9:
             hover_end = task.start + (release - task.start) * hover_need / (hover_need + lower)
         return hover_end, release
 
@@ -934,11 +946,13 @@ def build_manipulation(
     leg_torque: float = math.inf,
     geom: PlanGeometry = HECTOR_GEOMETRY,
     centre_grips: frozenset[str] = frozenset(),
+    hover_ends: Mapping[int, float] | None = None,
 ) -> ManipulationPlan:
     """Hand tracks, contacts, object holds and targets for the sorted planned tasks;
     `swings`: the planned foot swings (lift-off, touchdown; s), both feet; `leg_torque`: the
     weakest leg joint's torque limit (N m); `geom`: the robot's figures; `centre_grips`: the
-    objects to grip at their centre even when carried through locomotion."""
+    objects to grip at their centre even when carried through locomotion; `hover_ends`: the
+    earliest end (s) of the hover of the drops they name (by task index)."""
     shift = max((t.shift for t in tasks), default=0.0)
     b = _Builder(
         scenario,
@@ -949,6 +963,7 @@ def build_manipulation(
         leg_torque=leg_torque,
         geom=geom,
         centre_grips=centre_grips,
+        hover_ends=dict(hover_ends or {}),
     )
     for task in tasks:
         if task.action == "pick":

@@ -51,7 +51,7 @@ if TYPE_CHECKING:
     # Imported when first needed (`_model`): statics pulls in pinocchio and, through the
     # robot description, MuJoCo, which importing the plan package must not (the controller
     # imports it and never imports MuJoCo).
-    from collections.abc import Mapping
+    from collections.abc import Callable, Mapping
 
     from locoplan.plan.plan import Plan
     from locoplan.plan.statics import HeldPose, StaticAnalysis, StaticModel
@@ -256,6 +256,80 @@ def centre_grips(plan: Plan, scenario: Scenario) -> frozenset[str]:
             if reach < 0.0 and bottom + reach - hold.carry_top < k.CENTRE_GRIP_CLEARANCE:
                 out.add(hold.object)
     return frozenset(out)
+
+
+def reachable_hovers(plan: Plan, robot: str) -> dict[int, float]:
+    """The drops of `plan` (by task index) whose hover should end later, and when (s).
+
+    A drop's hover holds the object above its place point in the trunk frame planned at the
+    hover's end. Let m(t) be the arms' reach margin (`StaticPostures.arms`, negative: out of
+    reach) of that pose in the trunk frame planned at t, and m_ref its value at the latest
+    hover end the drop's window allows (the window's end less the lowering as planned), when
+    the trunk faces the target as nearly as it will. A drop whose m at the hover's end is
+    below min(m_ref, 0) - HOVER_REACH_SLACK gets the first time, on a HOVER_SEARCH_STEP
+    grid, at which m comes up to that bound (the latest one if none does): what the turn
+    still to come costs the arms stays within the slack.
+
+    Why: a drop may start in the second half of the turn towards its target (issue 12's
+    envelope), and the hover (DROP_HOVER_END of the window) holds the object over the place
+    point while the turn goes on: where the turn still has far to go the place point is off
+    to the side, beyond what HECTOR's three-joint arms reach across the body (envelope seed
+    56021, transfer-014: the far hand 0.17 m short at the hover's end, 0.04 m at the latest
+    hover end its window allows; the parcel slipped in the near hand, came down on the
+    platform 0.3 s before the planned lowering, was dragged round by the turn and fell off).
+    Over the dynamic transfers of seeds 53021-56021, 9 of the 22 runs whose hover the arms
+    missed by more than 0.1 m failed, against 9 of the 279 whose hover they reached.
+    Where the lowering needs the rest of the window (heavier objects) the hover cannot wait:
+    54021 transfer-036 and 56021 transfer-010 (4.1 and 3.6 kg, 0.14 m short) are unchanged.
+    A plan compiled anew with these hover ends has nothing left to delay."""
+
+    out: dict[int, float] = {}
+    model: StaticModel | None = None
+    for hold in plan.holds:
+        if hold.release_kind != "drop" or hold.release_task is None:
+            continue
+        task = plan.tasks[hold.release_task]
+        hands = tuple(HAND_NAMES.index(h) for h in hold.hands)
+        hovers = [_segment_end(plan, h, task.index, "hover") for h in hands]
+        lowers = [_segment_end(plan, h, task.index, "lower") for h in hands]
+        pairs = [(a, b) for a, b in zip(hovers, lowers, strict=True) if a and b]
+        if len(pairs) != len(hands):
+            continue
+        model = model or _model(robot)
+        t0 = max(hover.t1 for hover, _ in pairs)
+        latest = task.end - max(lower.t1 - lower.t0 for _, lower in pairs)
+        steps = int((latest - t0) / k.HOVER_SEARCH_STEP + 1e-9)
+        if steps < 1:
+            continue
+        margin = _hover_margin(plan, model, hands, pairs)
+        step = k.HOVER_SEARCH_STEP
+        bound = min(margin(t0 + steps * step), 0.0) - k.HOVER_REACH_SLACK
+        if margin(t0) >= bound:
+            continue
+        j = next((j for j in range(1, steps) if margin(t0 + j * step) >= bound), steps)
+        out[task.index] = t0 + j * step
+    return out
+
+
+def _hover_margin(
+    plan: Plan,
+    model: StaticModel,
+    hands: tuple[int, ...],
+    pairs: list[tuple[HandSegment, HandSegment]],
+) -> Callable[[float], float]:
+    """The arms' reach margin (m) of a drop's hover pose in the trunk frame planned at a
+    time t (s), as a function of t (`reachable_hovers`): the hands straight above their place
+    points (the "lower" segments' ends, world) at the hover's height (its end, trunk frame;
+    `manipulation._Builder._drop_geometry`)."""
+    from locoplan.plan.statics import HeldPose
+
+    def margin(t: float) -> float:
+        points = tuple(
+            (*_in_trunk(plan, lower, t)[:2], hover.end.point[2]) for hover, lower in pairs
+        )
+        return model.postures.arms(HeldPose(plan.trunk.height, hands, points))[2]
+
+    return margin
 
 
 def pre_lean_room(model: StaticModel, pose: HeldPose) -> float:
