@@ -225,7 +225,8 @@ class _Builder:
     # `payload.centre_grips`: their carry pose is out of the arms' reach).
     centre_grips: frozenset[str] = frozenset()
     # The earliest end (s) of each drop's hover, by the drop's task index (the compiler's
-    # `payload.reachable_hovers`: where the hover as timed is out of the arms' reach).
+    # `payload.reachable_hovers`: where the hover as timed is out of the arms' reach); past
+    # the latest end its window allows, the time whose trunk pose places the hover.
     hover_ends: Mapping[int, float] = field(default_factory=dict)
     initial: tuple[HandWaypoint, HandWaypoint] = field(
         default_factory=lambda: (default_waypoint(0), default_waypoint(1))
@@ -666,7 +667,11 @@ class _Builder:
             # The hover point moves with the trunk (where the plan has it at the hover's end):
             # while the robot still turns or walks, a world point would pull the hands (and
             # the load) hard against the trunk's lag; the lowering ends on the world point.
-            w_hover = HandWaypoint(world_to_trunk(self.trunk, t_hover, hover), "trunk")
+            # Where the hover cannot wait until the arms reach it (`hover_ends` after the
+            # window's last hover end), it holds the object where the trunk will have it then.
+            w_hover = HandWaypoint(
+                world_to_trunk(self.trunk, max(t_hover, earliest), hover), "trunk"
+            )
             w_open = HandWaypoint(opened, "world")
             w_back = HandWaypoint(back, "world")
             self.add(h, HandSegment(task.start, t_hover, self.current(h), w_hover, i, "hover"))

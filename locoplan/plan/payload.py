@@ -46,6 +46,7 @@ from locoplan.plan.geometry import half_extents
 from locoplan.plan.hands import HandSegment, Vec3
 from locoplan.plan.manipulation import HAND_NAMES, ObjectHold
 from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
+from locoplan.scenario.model import LOCOMOTION_ACTIONS
 
 if TYPE_CHECKING:
     # Imported when first needed (`_model`): statics pulls in pinocchio and, through the
@@ -263,12 +264,15 @@ def reachable_hovers(plan: Plan, robot: str) -> dict[int, float]:
 
     A drop's hover holds the object above its place point in the trunk frame planned at the
     hover's end. Let m(t) be the arms' reach margin (`StaticPostures.arms`, negative: out of
-    reach) of that pose in the trunk frame planned at t, and m_ref its value at the latest
-    hover end the drop's window allows (the window's end less the lowering as planned), when
-    the trunk faces the target as nearly as it will. A drop whose m at the hover's end is
-    below min(m_ref, 0) - HOVER_REACH_SLACK gets the first time, on a HOVER_SEARCH_STEP
-    grid, at which m comes up to that bound (the latest one if none does): what the turn
-    still to come costs the arms stays within the slack.
+    reach) of that pose in the trunk frame planned at t, and m_ref its value once the trunk
+    stops (at the end of the turn or walk that the drop overlaps, or at the latest hover end
+    the drop's window allows, the window's end less the lowering as planned, if later). A
+    drop whose m at the hover's end is below min(m_ref, 0) - HOVER_REACH_SLACK gets the first
+    time t*, on a HOVER_SEARCH_STEP grid, at which m comes up to that bound: what the turn
+    still to come costs the arms stays within the slack. The builder ends the hover at t*, or
+    at the latest end the window allows if t* is later, holding the object then where the
+    trunk will have it at t* (so that the lowering, in the world, brings it the rest of the
+    way while the trunk turns on).
 
     Why: a drop may start in the second half of the turn towards its target (issue 12's
     envelope), and the hover (DROP_HOVER_END of the window) holds the object over the place
@@ -279,9 +283,13 @@ def reachable_hovers(plan: Plan, robot: str) -> dict[int, float]:
     platform 0.3 s before the planned lowering, was dragged round by the turn and fell off).
     Over the dynamic transfers of seeds 53021-56021, 9 of the 22 runs whose hover the arms
     missed by more than 0.1 m failed, against 9 of the 279 whose hover they reached.
-    Where the lowering needs the rest of the window (heavier objects) the hover cannot wait:
-    54021 transfer-036 and 56021 transfer-010 (4.1 and 3.6 kg, 0.14 m short) are unchanged.
-    A plan compiled anew with these hover ends has nothing left to delay."""
+    Where the lowering of a heavier object needs the rest of the window the hover cannot
+    wait: 56021 transfer-010 (3.6 kg, 0.14 m short, the turn ending 0.5 s after the drop)
+    hovered where the trunk will face the conveyor and places its parcel; as the hover was
+    timed the parcel turned 60 deg in the hands. A plan compiled anew with these hover ends
+    has nothing left to delay."""
+
+    from locoplan.plan.statics import HeldPose
 
     out: dict[int, float] = {}
     model: StaticModel | None = None
@@ -297,14 +305,24 @@ def reachable_hovers(plan: Plan, robot: str) -> dict[int, float]:
             continue
         model = model or _model(robot)
         t0 = max(hover.t1 for hover, _ in pairs)
+        # Until the trunk stops: the end of the locomotion the drop overlaps, or of the
+        # drop's window less its lowering.
         latest = task.end - max(lower.t1 - lower.t0 for _, lower in pairs)
-        steps = int((latest - t0) / k.HOVER_SEARCH_STEP + 1e-9)
+        moving = (
+            t.end
+            for t in plan.tasks
+            if t.action in LOCOMOTION_ACTIONS and t.start < task.end and t.end > task.start
+        )
+        span = min(plan.t_end, max([latest, *moving]))
+        steps = int((span - t0) / k.HOVER_SEARCH_STEP + 1e-9)
         if steps < 1:
             continue
         margin = _hover_margin(plan, model, hands, pairs)
         step = k.HOVER_SEARCH_STEP
         bound = min(margin(t0 + steps * step), 0.0) - k.HOVER_REACH_SLACK
-        if margin(t0) >= bound:
+        # The pose the plan holds (a plan with these hover ends: nothing left to delay).
+        held = tuple(hover.end.point for hover, _ in pairs)
+        if model.postures.arms(HeldPose(plan.trunk.height, hands, held))[2] >= bound:
             continue
         j = next((j for j in range(1, steps) if margin(t0 + j * step) >= bound), steps)
         out[task.index] = t0 + j * step
