@@ -317,12 +317,16 @@ def reachable_hovers(plan: Plan, robot: str) -> dict[int, float]:
         steps = int((span - t0) / k.HOVER_SEARCH_STEP + 1e-9)
         if steps < 1:
             continue
+        # The pose the plan holds (a plan with these hover ends: nothing left to delay);
+        # within the slack of reach it is within the bound below, whatever m_ref.
+        held = tuple(hover.end.point for hover, _ in pairs)
+        now = model.postures.arms(HeldPose(plan.trunk.height, hands, held))[2]
+        if now >= -k.HOVER_REACH_SLACK:
+            continue
         margin = _hover_margin(plan, model, hands, pairs)
         step = k.HOVER_SEARCH_STEP
         bound = min(margin(t0 + steps * step), 0.0) - k.HOVER_REACH_SLACK
-        # The pose the plan holds (a plan with these hover ends: nothing left to delay).
-        held = tuple(hover.end.point for hover, _ in pairs)
-        if model.postures.arms(HeldPose(plan.trunk.height, hands, held))[2] >= bound:
+        if now >= bound:
             continue
         j = next((j for j in range(1, steps) if margin(t0 + j * step) >= bound), steps)
         out[task.index] = t0 + j * step
