@@ -408,7 +408,9 @@ class _Builder:
                 pull = max(0.0, ahead - target)
                 heavy = heavy_pull(obj.mass, ahead, self.leg_torque)
                 if heavy and not self.steps_during(t_lift, t_raise):
-                    rise = self._carry_height(task, obj, target, gz + phases.raise_height, lift)
+                    rise = self._carry_height(
+                        obj, self.carry_top(task, obj, target), gz + phases.raise_height, lift
+                    )
                     rise -= gz + phases.raise_height - self.trunk.height
                     raise_accel, accel = self._heavy_pull_accel(
                         task, t_lift, t_raise, t_settle, pull, rise, accel
@@ -417,8 +419,8 @@ class _Builder:
                 forward, x_in = max(target, ahead - pull), target
         # Then, for an object held standing, while the hands have nothing else to do (until
         # t_settle), it comes in to CARRY_FORWARD slowly enough not to set it swinging.
-        carry_z = self._carry_height(task, obj, forward, gz + phases.raise_height, lift)
         swept = self.carry_top(task, obj, forward)
+        carry_z = self._carry_height(obj, swept, gz + phases.raise_height, lift)
         for h in hands:
             side = SIDE[h]
             pre = beside((ox, oy, gz), side * (half + self.geom.grasp_clearance), lx, ly)
@@ -491,15 +493,15 @@ class _Builder:
         self.events.append(PlanEvent(t_lift, "lift", task.index, name))
 
     def _carry_height(
-        self, task: PlannedTask, obj: ObjectSpec, forward: float, raised_z: float, lift: float
+        self, obj: ObjectSpec, swept_top: float, raised_z: float, lift: float
     ) -> float:
-        """Height (m, in trunk) of the grip points in the carry pose of the object `task`
-        picks, carried `forward` (m ahead of the trunk) after a raise to `raised_z` (world, m),
-        gripped `lift` above its centre: at least CARRY_HEIGHT, no lower than it was raised
-        (a box picked from a table higher than the carry pose would otherwise be lowered back
-        towards that table's top while the robot turns or walks away from it: its corner
-        caught the table's edge), and `carry_clearance` above every fixture it sweeps over."""
-        swept_top = self.carry_top(task, obj, forward)
+        """Height (m, in trunk) of the grip points in the carry pose of the object `obj`,
+        raised to `raised_z` (world, m), gripped `lift` above its centre: at least
+        CARRY_HEIGHT, no lower than it was raised (a box picked from a table higher than the
+        carry pose would otherwise be lowered back towards that table's top while the robot
+        turns or walks away from it: its corner caught the table's edge), and
+        `carry_clearance` above `swept_top`, the highest fixture top it sweeps over
+        (`carry_top`, for where it is carried)."""
         return max(
             k.CARRY_HEIGHT + lift,
             raised_z - self.trunk.height,
