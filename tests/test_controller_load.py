@@ -376,3 +376,36 @@ def test_planned_object_accelerations_have_no_spike_at_the_lift_off_or_the_relea
             a = ctl._planned_object_accelerations(t, dt, n)
             worst = max(worst, float(np.abs(a).max()))
     assert worst < 20.0, worst
+
+
+def test_lift_feed_forward_has_the_whole_weight_from_the_planned_lift_off() -> None:
+    """`_lift_mass`, the mass the WBC feeds forward at the hands, for a pick followed by a turn
+    within LOAD_RAMP: the measured load before the grasp; over the grip (grasp to lift-off)
+    at least the object's mass times a smoothstep in time (half at the middle, to 1e-9);
+    from the lift-off to LOAD_RAMP after it the whole mass even with nothing measured yet
+    (the box still on its table); a larger measurement wins; after the window the
+    measurement alone. A pick with nothing stepping within LOAD_RAMP of its lift-off (the
+    standing hold) takes the measurement alone throughout."""
+    desc = load_robot_description("hector")
+    standing = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, standing)
+    (hold,) = standing.holds
+    for t in (hold.grasp + 0.01, hold.lift, hold.lift + 0.5 * LOAD_RAMP):
+        assert ctl._lift_mass(t, 0.2) == 0.2
+    turning = HOLD_AND_PUT_BACK.replace(
+        "{action: stand, start: 2.0, duration: 2.0}",
+        "{action: turn, angle: 20, start: 2.0, duration: 1.5}",
+    )
+    assert turning != HOLD_AND_PUT_BACK
+    plan = compile_plan(scenario_from_text(turning))
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    (hold,) = plan.holds
+    assert hold.grasp < hold.lift < 2.0 < hold.lift + LOAD_RAMP < hold.release
+    assert ctl._lift_mass(hold.grasp - 0.01, 0.0) == 0.0
+    middle = 0.5 * (hold.grasp + hold.lift)
+    assert ctl._lift_mass(middle, 0.0) == pytest.approx(0.5 * hold.mass, abs=1e-9)
+    assert ctl._lift_mass(middle, 0.9 * hold.mass) == pytest.approx(0.9 * hold.mass, abs=1e-12)
+    for t in (hold.lift, hold.lift + 0.5 * LOAD_RAMP, hold.lift + LOAD_RAMP - 1e-3):
+        assert ctl._lift_mass(t, 0.0) == pytest.approx(hold.mass, abs=1e-12)
+    assert ctl._lift_mass(hold.lift + 0.1, 1.2 * hold.mass) == pytest.approx(1.2 * hold.mass)
+    assert ctl._lift_mass(hold.lift + LOAD_RAMP + 1e-3, 0.3) == 0.3
