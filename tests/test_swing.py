@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from locoplan.control.swing import bump, min_jerk, raibert_foothold, swing_point
+from locoplan.control.swing import (
+    bump,
+    min_jerk,
+    raibert_foothold,
+    smoothstep,
+    smoothstep_array,
+    swing_point,
+)
 
 
 def test_swing_hits_end_points_at_rest() -> None:
@@ -45,3 +52,16 @@ def test_raibert_at_desired_speed_is_neutral_point() -> None:
     v = np.array([0.4, 0.0])
     p = raibert_foothold(np.zeros(2), v, v, 0.2, 0.1)
     np.testing.assert_allclose(p, [0.04, 0.0])
+
+
+def test_smoothstep_clips_and_matches_its_array_form() -> None:
+    u = np.array([-0.5, 0.0, 0.25, 0.5, 0.8, 1.0, 1.7])
+    # 3 u^2 - 2 u^3 on [0, 1]: 0.25 -> 0.15625, 0.5 -> 0.5, 0.8 -> 0.896 (exact in binary up
+    # to rounding); clipped outside.
+    expected = np.array([0.0, 0.0, 0.15625, 0.5, 0.896, 1.0, 1.0])
+    np.testing.assert_allclose(smoothstep_array(u), expected, atol=1e-15)
+    np.testing.assert_allclose([smoothstep(float(x)) for x in u], expected, atol=1e-15)
+    # Zero slope at both ends: central differences (h = 1e-6) about 0 and 1 from inside.
+    h = 1e-6
+    assert (smoothstep(2 * h) - smoothstep(0.0)) / (2 * h) == pytest.approx(0.0, abs=1e-5)
+    assert (smoothstep(1.0) - smoothstep(1.0 - 2 * h)) / (2 * h) == pytest.approx(0.0, abs=1e-5)

@@ -43,7 +43,7 @@ from locoplan.control.recovery import (
     support_hull,
 )
 from locoplan.control.support import clamp_into_support, convex_hull, foot_segments
-from locoplan.control.swing import min_jerk, swing_point
+from locoplan.control.swing import min_jerk, smoothstep, smoothstep_array, swing_point
 from locoplan.control.tasks import TaskGains, rot_z, rotation_error
 from locoplan.control.wbc import (
     WbcOutput,
@@ -1203,14 +1203,13 @@ class LocoManipulationController:
             if dz == 0.0:
                 continue
             end = t if on else float(self._grip_off[k])
-            u_in = min(max((end - float(self._grip_lift[k])) / LOAD_RAMP, 0.0), 1.0)
-            weight = u_in * u_in * (3.0 - 2.0 * u_in)
+            weight = smoothstep((end - float(self._grip_lift[k])) / LOAD_RAMP)
             if not on:
                 u = (t - float(self._grip_off[k])) / self._pair_blend
                 if u >= 1.0:
                     self._grip_dz[k] = 0.0
                     continue
-                weight *= 1.0 - u * u * (3.0 - 2.0 * u)
+                weight *= 1.0 - smoothstep(u)
             if out is targets:
                 out = np.array(targets, dtype=float, copy=True)
             out[k, 2] += weight * dz
@@ -1232,7 +1231,7 @@ class LocoManipulationController:
         if u >= 1.0:
             self._pair_release = (-math.inf, np.zeros(3))
             return targets
-        fade = 1.0 - u * u * (3.0 - 2.0 * u)
+        fade = 1.0 - smoothstep(u)
         out = np.array(targets, dtype=float, copy=True)
         out[0] += 0.5 * fade * offset
         out[1] -= 0.5 * fade * offset
@@ -1301,14 +1300,12 @@ class LocoManipulationController:
         """Scalar `_planned_mass` (the per-tick path: no arrays)."""
         out = 0.0
         for h in self.plan.holds:
-            up = min(max((t - h.lift) / LOAD_RAMP, 0.0), 1.0)
-            frac = up * up * (3.0 - 2.0 * up)
+            frac = smoothstep((t - h.lift) / LOAD_RAMP)
             if math.isfinite(h.release):
                 if h.release_kind == "throw":
                     frac = frac if t < h.release else 0.0
                 else:
-                    down = min(max((h.release - t) / LOAD_RAMP_DOWN, 0.0), 1.0)
-                    frac *= down * down * (3.0 - 2.0 * down)
+                    frac *= smoothstep((h.release - t) / LOAD_RAMP_DOWN)
             out += h.mass * frac
         return out
 
@@ -1348,8 +1345,8 @@ class LocoManipulationController:
             if not (h.grasp <= t < min(h.lift + LOAD_RAMP, h.release)):
                 continue
             span = h.lift - h.grasp
-            u = 1.0 if span <= 0.0 else min(max((t - h.grasp) / span, 0.0), 1.0)
-            out = max(out, h.mass * u * u * (3.0 - 2.0 * u))
+            u = 1.0 if span <= 0.0 else (t - h.grasp) / span
+            out = max(out, h.mass * smoothstep(u))
         return out
 
     def _hold_mass_at(self, t: float) -> float:
@@ -1372,14 +1369,12 @@ class LocoManipulationController:
         t = np.asarray(times, dtype=float)
         out = np.zeros(t.shape)
         for h in self.plan.holds:
-            up = np.clip((t - h.lift) / LOAD_RAMP, 0.0, 1.0)
-            frac = up * up * (3.0 - 2.0 * up)
+            frac = smoothstep_array((t - h.lift) / LOAD_RAMP)
             if math.isfinite(h.release):
                 if h.release_kind == "throw":
                     frac = np.where(t < h.release, frac, 0.0)
                 else:
-                    down = np.clip((h.release - t) / LOAD_RAMP_DOWN, 0.0, 1.0)
-                    frac = frac * down * down * (3.0 - 2.0 * down)
+                    frac = frac * smoothstep_array((h.release - t) / LOAD_RAMP_DOWN)
             out += h.mass * frac
         return out
 
@@ -1454,8 +1449,7 @@ class LocoManipulationController:
             s = (h.mass / (self.mass + h.mass)) * (p_o[None, :] - p_com[:, :2])
             size = np.linalg.norm(s, axis=1)
             x = np.minimum(self._lean_share(size, np.zeros(len(t))) * size, h.pre_lean)
-            u = np.clip((t - t0) / (t1 - t0), 0.0, 1.0)
-            ramp = np.where(inside, u * u * (3.0 - 2.0 * u), 0.0)
+            ramp = np.where(inside, smoothstep_array((t - t0) / (t1 - t0)), 0.0)
             with np.errstate(divide="ignore", invalid="ignore"):
                 unit = np.where(size[:, None] > 1e-9, s / size[:, None], 0.0)
             out -= (ramp * x)[:, None] * unit
@@ -1555,8 +1549,7 @@ class LocoManipulationController:
             inside = (t >= h.grasp) & (t < h.release + LOAD_RAMP_DOWN)
             w = np.ones(t.shape)
             if h.release_kind == "drop" and math.isfinite(h.release):
-                down = np.clip((h.release - t) / LOAD_RAMP_DOWN, 0.0, 1.0)
-                w = down * down * (3.0 - 2.0 * down)
+                w = smoothstep_array((h.release - t) / LOAD_RAMP_DOWN)
             out = np.where(inside, np.maximum(out, w), out)
         return np.where(out < 0.0, 1.0, out)
 

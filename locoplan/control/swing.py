@@ -33,6 +33,19 @@ def min_jerk(phi: float) -> tuple[float, float, float]:
     return s, ds, dds
 
 
+def smoothstep(u: float) -> float:
+    """Cubic blend 3 c^2 - 2 c^3 of c = u clipped to [0, 1]: from 0 to 1 with zero slope at
+    both ends (the load ramps, grip blends and lean ramps of the controller)."""
+    c = 0.0 if u < 0.0 else (1.0 if u > 1.0 else u)
+    return c * c * (3.0 - 2.0 * c)
+
+
+def smoothstep_array(u: FloatArray) -> FloatArray:
+    """Element-wise `smoothstep` of an array (same shape)."""
+    c = np.clip(u, 0.0, 1.0)
+    return c * c * (3.0 - 2.0 * c)
+
+
 def bump(phi: float) -> tuple[float, float, float]:
     """b(phi) = 64 phi^3 (1 - phi)^3 (peak 1 at phi = 1/2) and its first two derivatives."""
     p = min(max(phi, 0.0), 1.0)
