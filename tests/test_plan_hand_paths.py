@@ -14,6 +14,7 @@ from locoplan.plan import constants as k
 from locoplan.plan.clearance import fixture_obstacle, object_obstacle, track_clearance
 from locoplan.plan.hand_paths import (
     carry_forward,
+    grip_behind,
     grip_height,
     throw_line,
     tuck_waypoint,
@@ -41,6 +42,18 @@ def test_grip_height_stays_below_the_top_and_spheres_at_the_equator() -> None:
     assert grip_height(_box(0.04)) == 0.0
     ball = ObjectSpec(shape="sphere", size=[0.1], mass=1.0, position=[0.0, 0.0, 0.5])
     assert grip_height(ball) == 0.0
+
+
+def test_grip_behind_keeps_the_hands_on_the_near_side_face() -> None:
+    # half depth 0.10 m: GRIP_BEHIND_CENTRE; a shallow box (half depth 0.04 m): the hand
+    # point stays HAND_RADIUS + GRASP_TOP_MARGIN inside its near face; spheres: the centre
+    assert grip_behind(_box(0.2), 0.10) == k.GRIP_BEHIND_CENTRE
+    assert grip_behind(_box(0.2), 0.04) == pytest.approx(
+        0.04 - k.HAND_RADIUS - k.GRASP_TOP_MARGIN, abs=EXACT
+    )
+    assert grip_behind(_box(0.2), 0.02) == 0.0
+    ball = ObjectSpec(shape="sphere", size=[0.1], mass=1.0, position=[0.0, 0.0, 0.5])
+    assert grip_behind(ball, 0.1) == 0.0
 
 
 def test_carry_forward_keeps_the_pick_distance_within_range() -> None:

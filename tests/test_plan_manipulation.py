@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -501,3 +502,42 @@ def test_a_turn_waits_for_the_end_of_a_heavy_pick_when_the_rate_allows(
         assert turn.start == pytest.approx(1.4)
         assert first_swing < pick.end
         assert not plan.notes
+
+
+HEAVY_FAR_LOW = Path(__file__).parent / "data" / "heavy-far-low-pick.yaml"
+
+
+def test_a_heavy_box_at_the_arms_stretch_is_gripped_behind_its_centre_and_raised_first() -> None:
+    """tests/data/heavy-far-low-pick.yaml: 7.62 kg 0.35 m ahead on a 0.40 m table. Gripped at
+    its centre, the arms would have no room for the lean its lift needs
+    (`payload.behind_grips`): the hands grip it GRIP_BEHIND_CENTRE nearer the robot, the raise
+    goes straight up for RAISE_UP_SHARE of its time before it pulls in, and the object
+    reference stays the box's centre, from the lift-off to the drop, which sets that centre
+    on its target. package-transfer's 3 kg package, whose grasp leaves the arms room, keeps
+    its centre grip and a single raise."""
+    scenario = scenario_from_text(HEAVY_FAR_LOW.read_text())
+    plan = compile_plan(scenario)
+    (hold,) = plan.holds
+    assert hold.grip_behind == k.GRIP_BEHIND_CENTRE
+    assert hold.pre_lean > 0.0  # room for the lean now (none with the centre grip)
+    box = np.array(scenario.objects["box"].position)
+    segments = [plan.manipulation.tracks[h].segments for h in range(2)]
+    grips = [next(g for g in s if g.label == "grip").end.point for s in segments]
+    mid = 0.5 * (np.array(grips[0]) + np.array(grips[1]))
+    assert math.dist(mid[:2], box[:2]) == pytest.approx(k.GRIP_BEHIND_CENTRE, abs=1e-9)
+    assert math.hypot(*mid[:2]) < math.hypot(*box[:2])  # nearer the trunk (at the origin)
+    straight, raise_ = (g for g in segments[0] if g.label == "raise")
+    assert straight.start.point[:2] == straight.end.point[:2] == grips[0][:2]
+    assert straight.t0 == hold.lift and straight.t1 == raise_.t0
+    assert straight.t1 - straight.t0 == pytest.approx(
+        k.RAISE_UP_SHARE * (raise_.t1 - straight.t0), abs=1e-12
+    )
+    assert raise_.end.point[:2] != pytest.approx(grips[0][:2], abs=1e-3)  # then pulled in
+    at_lift, before_release = plan.object_positions(np.array([hold.lift, hold.release - 1e-6]))
+    assert at_lift[:2] == pytest.approx(box[:2], abs=1e-9)
+    target = plan.object_target("box").position
+    assert before_release[:2] == pytest.approx(target[:2], abs=1e-9)
+    (package,) = compile_plan(repo_scenario("package-transfer")).holds
+    assert package.grip_behind == 0.0
+    transfer = compile_plan(repo_scenario("package-transfer"))
+    assert len([g for g in transfer.manipulation.tracks[0].segments if g.label == "raise"]) == 1

@@ -13,6 +13,7 @@ from locoplan.plan.footholds import build_footholds
 from locoplan.plan.gait import FOOT_NAMES, build_contact_schedule
 from locoplan.plan.manipulation import build_manipulation
 from locoplan.plan.payload import (
+    behind_grips,
     centre_grips,
     check_grasp_reach,
     check_payload,
@@ -78,6 +79,7 @@ def compile_plan(
 
     base_notes: tuple[str, ...] = ()
     grips: frozenset[str] = frozenset()
+    behinds: frozenset[str] = frozenset()
 
     def build(
         planned: tuple[PlannedTask, ...],
@@ -94,6 +96,7 @@ def compile_plan(
             base_notes + notes,
             grips,
             hovers,
+            behinds,
         )
 
     plan = build(tasks)
@@ -103,6 +106,9 @@ def compile_plan(
         plan = build(tasks)
     grips = centre_grips(plan, scenario)
     if grips:
+        plan = build(tasks)
+    behinds = behind_grips(plan, scenario)
+    if behinds:
         plan = build(tasks)
     try:
         check_grasp_reach(plan, scenario.robot)
@@ -149,10 +155,12 @@ def _assemble(
     notes: tuple[str, ...] = (),
     centre_grips: frozenset[str] = frozenset(),
     hover_ends: Mapping[int, float] | None = None,
+    behind_grips: frozenset[str] = frozenset(),
 ) -> Plan:
     """The plan of `tasks` (planned, re-timed for `strategy`), before the reach and payload
     checks; `centre_grips`: objects gripped at their centre (`payload.centre_grips`);
-    `hover_ends`: the earliest end of the drops' hovers (`payload.reachable_hovers`)."""
+    `hover_ends`: the earliest end of the drops' hovers (`payload.reachable_hovers`);
+    `behind_grips`: objects gripped nearer than their centre (`payload.behind_grips`)."""
     contacts = build_contact_schedule(tasks, scenario.gait.period, scenario.gait.swing)
     start = scenario.robot_start
     trunk = build_trunk_path(
@@ -164,7 +172,7 @@ def _assemble(
     # the same cached model): about 1 s in a fresh process, which locomotion need not pay.
     leg_torque = _leg_torque(scenario.robot) if scenario.objects else math.inf
     manipulation = build_manipulation(
-        tasks, scenario, trunk, swings, leg_torque, geometry, centre_grips, hover_ends
+        tasks, scenario, trunk, swings, leg_torque, geometry, centre_grips, hover_ends, behind_grips
     )
 
     # Drops and throws are done by the hands that picked the object.

@@ -69,6 +69,14 @@ PICK_STANDING: Final = PickPhases(0.40, 0.55, 0.60, 0.75, 0.04)
 # package-transfer.yaml over package masses 2.6-3.4 kg: 12 of 14 runs placed the package
 # without a fall with these phases, 5 of 14 with PICK_STANDING's.
 PICK_CARRIED: Final = PickPhases(0.35, 0.45, 0.50, 0.85, 0.06)
+# A pick gripped behind its object's centre (GRIP_BEHIND_CENTRE) that pulls it in during the
+# raise (`manipulation`, `pull`) goes straight up for this share of the raise and pulls in
+# over the rest. Why: the object leaves its support only once the hands carry its weight,
+# 0.09-0.18 s after the planned lift-off for 5-8 kg boxes (raises of 0.29-0.52 s); pulled in
+# before then it is dragged across its table, and the friction's reaction at the hands draws
+# the robot towards the table (envelope seed 62021, walk-carry-010: 146 N at the hands, the
+# trunk 18 cm forward; straight up first: under 15 N once the box had left).
+RAISE_UP_SHARE: Final = 0.5
 
 # --- drop ------------------------------------------------------------------------------------
 # 0 .. DROP_HOVER_END: carry pose -> DROP_HOVER_HEIGHT above the place pose (moving with the
@@ -193,6 +201,16 @@ GRASP_CLEARANCE: Final = 0.05
 # (locoplan.plan.manipulation.grip_height).
 GRASP_ABOVE_CENTRE: Final = 0.04
 GRASP_TOP_MARGIN: Final = 0.01
+# A box whose grasp leaves the arms too little room for its lift's lean
+# (`payload.behind_grips`) is gripped this far nearer the robot than its centre (m, along the
+# approach), but with the hand points at least HAND_RADIUS + GRASP_TOP_MARGIN inside its near
+# face (`hand_paths.grip_behind`); its centre rides that far ahead of the hands
+# (`Plan.object_positions`) and is set down on the drop's target. 3 cm gives the arms that
+# much room at the grasp. The box then hangs with its weight's moment m g d about the grip
+# line, which the palms hold by friction up to (4/3) m g r_palm (`locoplan.sim.grasp`,
+# r_palm 0.04 m: a 5.3 cm lever): 3 cm uses 56 % of it and leaves the rest for the swing of
+# turns and steps (why only those boxes: `payload.behind_grips`).
+GRIP_BEHIND_CENTRE: Final = 0.03
 # The contact targets lie this far inside the object's sides, so that the hands' Cartesian PD
 # presses on the object (m).
 GRASP_SQUEEZE: Final = 0.01

@@ -130,6 +130,7 @@ def plan_to_dict(plan: Plan, reference_dt: float = 0.02) -> dict[str, Any]:
                 "release_task": h.release_task,
                 "release_kind": h.release_kind,
                 "pre_lean": h.pre_lean,
+                "grip_behind": h.grip_behind,
             }
             for h in plan.holds
         ],

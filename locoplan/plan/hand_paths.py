@@ -116,6 +116,17 @@ def grip_height(obj: ObjectSpec, geo: PlanGeometry = HECTOR_GEOMETRY) -> float:
     return max(0.0, min(k.GRASP_ABOVE_CENTRE, top))
 
 
+def grip_behind(obj: ObjectSpec, depth: float, geo: PlanGeometry = HECTOR_GEOMETRY) -> float:
+    """How far nearer the robot than its centre (m, along the approach) a box of
+    `payload.behind_grips` is gripped: GRIP_BEHIND_CENTRE, at most up to the hand radius +
+    GRASP_TOP_MARGIN inside its near face, which lies `depth` (m) from its centre towards the
+    robot (constants' docstring). A sphere is gripped at its centre."""
+    if obj.shape != "box":
+        return 0.0
+    room = depth - geo.hand_radius - k.GRASP_TOP_MARGIN
+    return max(0.0, min(k.GRIP_BEHIND_CENTRE, room))
+
+
 def carry_forward(
     pose: tuple[float, float, float, float, float, float],
     ox: float,

@@ -16,7 +16,9 @@ themselves (approach, retreat, throw line) are `locoplan.plan.hand_paths`. Geome
   front), no faster than `pull_accel` allows for its mass: as far as that goes during the raise, the
   rest in the carry move, up to the carry height and in at once, which takes the time it needs past
   the pick's end (`_carry_move`; a "pull" after it if the object's drop comes first), and stays
-  there.
+  there. A box whose grasp leaves the arms no room for its lift's lean (the compiler's
+  `payload.behind_grips`) is gripped GRIP_BEHIND_CENTRE nearer the robot than its centre and
+  raised straight up for RAISE_UP_SHARE of the raise before it is pulled in.
 - drop: the object's centre goes to `at`, or onto the fixture's top at the fully supported
   point nearest the robot's planned position at the release instant; the grasp axis is across
   the robot-to-target direction. The object hovers above the place point (moving with the
@@ -55,6 +57,7 @@ from locoplan.plan.hand_paths import (
     carry_in,
     clear_throw_line,
     default_waypoint,
+    grip_behind,
     grip_height,
     heavy_pull,
     initial_waypoint,
@@ -96,7 +99,9 @@ class ObjectHold:
     trunk may stand back from the object at the lift-off with the arms still reaching its grip
     points (`locoplan.plan.payload.pre_lean_room`): where a foot steps within a second of
     the lift-off, the controller leans back before the load comes on by the equal-margin
-    share of the shift, at most this far; 0 until the compiler sets it.
+    share of the shift, at most this far; 0 until the compiler sets it. `grip_behind` (m): how
+    far nearer the robot than the object's centre the hands hold it, across the line between
+    them (`hand_paths.grip_behind`; 0 for a centre grip).
     """
 
     object: str
@@ -113,6 +118,7 @@ class ObjectHold:
     grip_height: float = 0.0
     carry_top: float = 0.0
     pre_lean: float = 0.0
+    grip_behind: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,6 +177,7 @@ class _OpenHold:
     yaw_in_grasp: float
     grip_height: float
     carry_top: float
+    grip_behind: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -224,6 +231,10 @@ class _Builder:
     # Objects gripped at their centre although carried through locomotion (the compiler's
     # `payload.centre_grips`: their carry pose is out of the arms' reach).
     centre_grips: frozenset[str] = frozenset()
+    # Objects gripped nearer the robot than their centre and raised straight up before they
+    # are pulled in (the compiler's `payload.behind_grips`: at their grasp the arms lack the
+    # room for the lean their lift needs).
+    behind_grips: frozenset[str] = frozenset()
     # The earliest end (s) of each drop's hover, by the drop's task index (the compiler's
     # `payload.reachable_hovers`: where the hover as timed is out of the arms' reach); past
     # the latest end its window allows, the time whose trunk pose places the hover.
@@ -385,9 +396,18 @@ class _Builder:
         depth = support_half_width(obj, oyaw, ax, ay)
         obstacles = self.obstacles()
         geom = self.geom
-        lift = grip_height(obj, geom) if moving and name not in self.centre_grips else 0.0
+        gripped_above = moving and name not in self.centre_grips
+        lift = grip_height(obj, geom) if gripped_above else 0.0
         gz = oz + lift
-        forward = carry_forward(self.trunk.pose_at(task.end), ox, oy, geom)
+        # The grip points' midpoint (world): `back` nearer the robot than the centre for a box
+        # carried to a drop (GRIP_BEHIND_CENTRE); every hand quantity below is the hands'
+        # (the object's centre is `back` further ahead).
+        release = self.release_of(task)
+        to_drop = release is not None and release.action == "drop"
+        behind = gripped_above and to_drop and name in self.behind_grips
+        back = grip_behind(obj, depth, geom) if behind else 0.0
+        hx, hy = ox - back * ax, oy - back * ay
+        forward = carry_forward(self.trunk.pose_at(task.end), hx, hy, geom)
         # Carried through locomotion: in to `carry_in` (hand_paths). The raise pulls it in
         # by `pull` (m, along the approach) as it goes up, no faster than `pull_accel` for its
         # mass, and the rest of the way (to `x_in`, m ahead of the trunk) in the carry move
@@ -395,6 +415,7 @@ class _Builder:
         # a heavy object (PULL_FAST_SHARE) comes the whole way in before the first step if
         # the robot stands on both feet during the raise (`_heavy_pull_accel`).
         pull = 0.0
+        t_pull = t_lift
         x_in = forward
         # The next task that uses the hands (inf if none): the carry move, the heavy pull and
         # the settling-in end by then.
@@ -402,33 +423,40 @@ class _Builder:
         accel = pull_accel(obj.mass, geom)
         raise_accel = accel
         if moving:
-            target = carry_in(support_half_width(obj, oyaw, ax, ay), geom)
+            target = carry_in(depth - back, geom)
+            # Gripped behind its centre: straight up first (RAISE_UP_SHARE), pulled in over
+            # the rest of the raise.
+            if back > 0.0:
+                t_pull = t_raise - k.RAISE_UP_SHARE * (t_raise - t_lift)
             if target < forward:
-                ahead = world_to_trunk(self.trunk, t_raise, (ox, oy, oz))[0]
+                ahead = world_to_trunk(self.trunk, t_raise, (hx, hy, oz))[0]
                 pull = max(0.0, ahead - target)
-                heavy = heavy_pull(obj.mass, ahead, self.leg_torque)
+                heavy = heavy_pull(obj.mass, ahead + back, self.leg_torque)
                 if heavy and not self.steps_during(t_lift, t_raise):
                     rise = self._carry_height(
-                        obj, self.carry_top(task, obj, target), gz + phases.raise_height, lift
+                        obj,
+                        self.carry_top(task, obj, target + back),
+                        gz + phases.raise_height,
+                        lift,
                     )
                     rise -= gz + phases.raise_height - self.trunk.height
                     raise_accel, accel = self._heavy_pull_accel(
-                        task, t_lift, t_raise, t_settle, pull, rise, accel
+                        task, t_pull, t_raise, t_settle, pull, rise, accel
                     )
-                pull = min(pull, rest_to_rest_distance(t_raise - t_lift, raise_accel))
+                pull = min(pull, rest_to_rest_distance(t_raise - t_pull, raise_accel))
                 forward, x_in = max(target, ahead - pull), target
         # Then, for an object held standing, while the hands have nothing else to do (until
         # t_settle), it comes in to CARRY_FORWARD slowly enough not to set it swinging.
-        swept = self.carry_top(task, obj, forward)
+        swept = self.carry_top(task, obj, forward + back)
         carry_z = self._carry_height(obj, swept, gz + phases.raise_height, lift)
         for h in hands:
             side = SIDE[h]
-            pre = beside((ox, oy, gz), side * (half + self.geom.grasp_clearance), lx, ly)
+            pre = beside((hx, hy, gz), side * (half + self.geom.grasp_clearance), lx, ly)
             # Beside the object's near corner, as far outside its near face as `pre` is
             # outside its side: where a reach that would cut the corner goes first.
             entry = beside(pre, -(depth + self.geom.grasp_clearance), ax, ay)
-            touch = beside((ox, oy, gz), side * (half + geom.hand_radius), lx, ly)
-            grip = beside((ox, oy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
+            touch = beside((hx, hy, gz), side * (half + geom.hand_radius), lx, ly)
+            grip = beside((hx, hy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
             raised = (grip[0] - pull * ax, grip[1] - pull * ay, gz + phases.raise_height)
             carry = (forward, side * (half - k.GRASP_SQUEEZE), carry_z)
             w_pre = HandWaypoint(pre, "world")
@@ -456,7 +484,13 @@ class _Builder:
                 self.add(h, seg)
             self.add(h, HandSegment(t_reach, t_contact, w_pre, w_touch, i, "squeeze"))
             self.add(h, HandSegment(t_contact, t_lift, w_touch, w_grip, i, "grip"))
-            self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
+            if t_pull > t_lift and pull > 0.0:
+                up = (grip[0], grip[1], gz + k.RAISE_UP_SHARE * phases.raise_height)
+                w_up = HandWaypoint(up, "world")
+                self.add(h, HandSegment(t_lift, t_pull, w_grip, w_up, i, "raise"))
+                self.add(h, HandSegment(t_pull, t_raise, w_up, w_raised, i, "raise"))
+            else:
+                self.add(h, HandSegment(t_lift, t_raise, w_grip, w_raised, i, "raise"))
             t_carry, x_to = self._carry_move(task, t_raise, raised, carry, x_in, accel, t_settle)
             carry = (x_to, carry[1], carry[2])
             w_carry = HandWaypoint(carry, "trunk")
@@ -488,6 +522,7 @@ class _Builder:
             oyaw - math.atan2(ay, ax),
             lift,
             swept,
+            back,
         )
         self.events.append(PlanEvent(t_contact, "grasp", task.index, name))
         self.events.append(PlanEvent(t_lift, "lift", task.index, name))
@@ -520,7 +555,8 @@ class _Builder:
     ) -> tuple[float, float]:
         """Peak accelerations (m/s^2) of the raise and of the carry move of a heavy object
         (PULL_FAST_SHARE) that the robot lifts standing on both feet: the gentlest, down to
-        `gentlest` (its `pull_accel`), with which the raise (pulling in as it goes up) and
+        `gentlest` (its `pull_accel`), with which the raise (pulling in as it goes up from
+        `t_lift`, s: the pick passes the end of its straight-up share) and
         the carry move (the rest of the `pull`, m, and `rise`, m up to the carry height) are
         done before the first step after the lift-off (and before the hands' next task, at
         `t_next` s, inf if none); if
@@ -634,6 +670,7 @@ class _Builder:
                 hold.yaw_in_grasp,
                 hold.grip_height,
                 hold.carry_top,
+                grip_behind=hold.grip_behind,
             )
         )
         for h in hold.hands:
@@ -825,7 +862,12 @@ class _Builder:
             # how far the object comes towards it before the drop ends.
             towards = max(0.0, side * (drift[0] * lx + drift[1] * ly))
             width = half + self.geom.grasp_clearance + towards * (task.end - t_release)
-            grip_at = (tx, ty, tz + hold.grip_height)
+            # The hands `grip_behind` nearer the robot than the object's centre (the pick's).
+            grip_at = (
+                tx - hold.grip_behind * ax,
+                ty - hold.grip_behind * ay,
+                tz + hold.grip_height,
+            )
             rest = beside(grip_at, side * (half - k.GRASP_SQUEEZE), lx, ly)
             put = (rest[0], rest[1], rest[2] - k.DROP_PRESS)
             hover = (put[0], put[1], max(rest[2] + k.DROP_HOVER_HEIGHT, hover_floor))
@@ -954,12 +996,14 @@ def build_manipulation(
     geom: PlanGeometry = HECTOR_GEOMETRY,
     centre_grips: frozenset[str] = frozenset(),
     hover_ends: Mapping[int, float] | None = None,
+    behind_grips: frozenset[str] = frozenset(),
 ) -> ManipulationPlan:
     """Hand tracks, contacts, object holds and targets for the sorted planned tasks;
     `swings`: the planned foot swings (lift-off, touchdown; s), both feet; `leg_torque`: the
     weakest leg joint's torque limit (N m); `geom`: the robot's figures; `centre_grips`: the
     objects to grip at their centre even when carried through locomotion; `hover_ends`: the
-    earliest end (s) of the hover of the drops they name (by task index)."""
+    earliest end (s) of the hover of the drops they name (by task index); `behind_grips`:
+    the objects to grip nearer the robot than their centre (`hand_paths.grip_behind`)."""
     shift = max((t.shift for t in tasks), default=0.0)
     b = _Builder(
         scenario,
@@ -970,6 +1014,7 @@ def build_manipulation(
         leg_torque=leg_torque,
         geom=geom,
         centre_grips=centre_grips,
+        behind_grips=behind_grips,
         hover_ends=dict(hover_ends or {}),
     )
     for task in tasks:

@@ -21,10 +21,14 @@ weight standing still:
   passed).
 
 Each pose goes through `locoplan.plan.statics` with the object's mass (robot facts from its
-description). `check_payload` refuses a plan whose static worst torque ratio exceeds 1.0, or
-whose combined centre of mass no pelvis shift brings over the feet, with an `infeasible
-(payload)` or `infeasible (balance)` `InfeasiblePlanError` located at the pick (carry) or the
-drop (place). `payload_margins` gives every pose's full analysis, for `locoplan plan`.
+description), its weight at the hands' points. A box gripped `ObjectHold.grip_behind` (3 cm)
+nearer the robot than its centre has its weight that much further out: not modelled here;
+it moves the combined centre of mass by m d / (M + m) (under 1 cm for 8 kg on HECTOR) and
+puts a moment m g d (2.4 N m at 8 kg) on the hands, which the palms pass to the arms.
+`check_payload` refuses a plan whose static worst torque ratio exceeds 1.0, or whose
+combined centre of mass no pelvis shift brings over the feet, with an `infeasible (payload)`
+or `infeasible (balance)` `InfeasiblePlanError` located at the pick (carry) or the drop
+(place). `payload_margins` gives every pose's full analysis, for `locoplan plan`.
 
 Cost: 3-6 ms per pose for the check (one linear programme at the shift that centres the CoM,
 which is an upper bound of the best ratio; the full search runs only when that bound is above
@@ -215,6 +219,67 @@ def with_pre_leans(plan: Plan, robot: str) -> Plan:
         room = pre_lean_room(model, grasp.pose) if grasp is not None else 0.0
         holds.append(replace(hold, pre_lean=room))
     return replace(plan, manipulation=replace(plan.manipulation, holds=tuple(holds)))
+
+
+def lift_lean(model: StaticModel, pose: HeldPose, mass: float) -> float:
+    """How far (m) the robot leans back before a lift-off of `mass` kg gripped in the grasp
+    `pose`: the controller's equal-margin share of the load shift (`locoplan.control.
+    controller._pre_lean`, `_lean_share`), beta s with s = m_o d / (m + m_o), d the hands'
+    midpoint ahead of the robot's CoM, and beta = 1/2 + (c - middle) / s clipped to [0, 1],
+    c the CoM and middle the feet's support's middle along x, in the grasp posture."""
+    arms_q, _, _ = model.postures.arms(pose)
+    terms = model.postures.terms(arms_q, pose, 0.0)
+    ahead = float(terms.p_load[0] - terms.com[0])
+    s = mass / (model.mass + mass) * ahead
+    if s <= 0.0:
+        return 0.0
+    middle = 0.5 * (model.support_x[0] + model.support_x[1])
+    beta = min(max(0.5 + (float(terms.com[0]) - middle) / s, 0.0), 1.0)
+    return beta * s
+
+
+def behind_grips(plan: Plan, scenario: Scenario) -> frozenset[str]:
+    """The objects of `plan` (compiled from `scenario`) to grip GRIP_BEHIND_CENTRE nearer the
+    robot than their centre and to raise straight up before pulling them in
+    (`manipulation`, RAISE_UP_SHARE): those held by both hands, gripped above their centre
+    (carried through locomotion) to a drop, whose grasp leaves the arms less room to lean back
+    (`pre_lean_room`) than the lift's lean (`lift_lean`) by more than the robot's grasp
+    tolerance (`PlanGeometry.grasp_tolerance`: how far the hands may be off the points they
+    track; a shortfall within it the hands' tracking absorbs).
+
+    Why: at their grasp the arms are at full stretch, the elbows on their joint limit, so the
+    arms are rigid rods, and the lean back before the lift-off pulled the box across its
+    table through them while it still rested there: 30-146 N towards the robot at the hands
+    while they carried 0-25 N of its weight, and the reaction drew the trunk 18-21 cm forward
+    in 0.3 s (envelope seed 62021, walk-carry-010, -012, -027: 7.4-7.6 kg 0.35-0.38 m out on
+    0.40-0.42 m tables, fell in both strategies). Gripped nearer, the arms have the room;
+    raised straight up first, the box is not pulled in before it has left its table (it
+    leaves 0.09-0.18 s after the planned lift-off). Only these objects: gripped nearer than
+    its centre, a box hangs with its weight's moment about the grip line held by the palms'
+    friction (`locoplan.sim.grasp`), which leaves less for the swing of the turns; for every
+    carried box to a drop, an H1 parcel gripped off its centre already (a right turn's pick,
+    tests/test_h1_transfer.py) swung to 28 deg instead of 21, and one HECTOR transfer of seed
+    63021 left its parcel off its platform. The shortfalls, lean less room: 5.3-6.1 cm for the
+    three falls above and 63021's transfer-041 (5.77 kg, fell in both strategies without the
+    grip, placed with it), 2.4 cm for that lost transfer (-021), 1.3 cm for an H1 transfer
+    that the grip lost (seed 57027, transfer-020, 3.38 kg not placed), 1.5-1.7 cm for two
+    62021 walk-carries that succeed either way: the grasp tolerance (3 cm HECTOR, 4.3 cm H1)
+    keeps the first and leaves the rest as they were."""
+    if not plan.holds:
+        return frozenset()
+    model: StaticModel | None = None
+    out = set()
+    for hold in plan.holds:
+        if hold.grip_height <= 0.0 or hold.release_kind != "drop" or len(hold.hands) != 2:
+            continue
+        grasp = _grasp_pose(plan, hold)
+        if grasp is None:
+            continue
+        model = model or _model(scenario.robot)
+        short = lift_lean(model, grasp.pose, hold.mass) - pre_lean_room(model, grasp.pose)
+        if short > plan.geometry.grasp_tolerance:
+            out.add(hold.object)
+    return frozenset(out)
 
 
 def centre_grips(plan: Plan, scenario: Scenario) -> frozenset[str]:

@@ -307,8 +307,10 @@ class Plan:
         hand targets for the given trunk poses (origins (n, 3) m, yaws (n,) rad; default: the
         planned reference). That is the object's centre when it is gripped at its centre and
         `ObjectHold.grip_height` above it for a box carried through locomotion (it hangs
-        level below the grip). The MPC uses it as the point where the object's weight acts:
-        with a vertical force only x and y matter to the moment (Model 2); Model 1's combined
+        level below the grip), and `ObjectHold.grip_behind` further from the robot across the
+        line between the hands for a box gripped nearer than its centre. The MPC uses it as
+        the point where the object's weight acts: with a vertical force only x and y matter to
+        the moment (Model 2); Model 1's combined
         inertia sees the grip height too (a few cm). Where nothing is held: the trunk
         position (so r_e = 0 there). A one-hand hold puts the point half the grip width from
         the hand towards the trunk's centre line (an approximation)."""
@@ -333,6 +335,14 @@ class Plan:
             ]
             if len(pts) == 2:
                 position[n] = 0.5 * (pts[0] + pts[1])
+                if hold.grip_behind > 0.0:
+                    # The centre lies across the grip line, away from the robot (the left
+                    # hand is on the approach's left): `ObjectHold.grip_behind`.
+                    dx, dy = float(pts[0][0] - pts[1][0]), float(pts[0][1] - pts[1][1])
+                    norm = math.hypot(dx, dy)
+                    if norm > 1e-9:
+                        position[n, 0] += hold.grip_behind * dy / norm
+                        position[n, 1] -= hold.grip_behind * dx / norm
             else:
                 side = 1.0 if hold.hands[0] == "L" else -1.0
                 y_axis = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
