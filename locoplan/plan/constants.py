@@ -75,7 +75,8 @@ PICK_CARRIED: Final = PickPhases(0.35, 0.45, 0.50, 0.85, 0.06)
 # 0.09-0.18 s after the planned lift-off for 5-8 kg boxes (raises of 0.29-0.52 s); pulled in
 # before then it is dragged across its table, and the friction's reaction at the hands draws
 # the robot towards the table (envelope seed 62021, walk-carry-010: 146 N at the hands, the
-# trunk 18 cm forward; straight up first: under 15 N once the box had left).
+# trunk 18 cm forward; straight up first: under 15 N once the box had left). Only 0.5 was
+# tried (on the 52 runs that failed on seeds 53021-58021 and 62021, and seeds 63021, 64021).
 RAISE_UP_SHARE: Final = 0.5
 
 # --- drop ------------------------------------------------------------------------------------
@@ -209,7 +210,8 @@ GRASP_TOP_MARGIN: Final = 0.01
 # much room at the grasp. The box then hangs with its weight's moment m g d about the grip
 # line, which the palms hold by friction up to (4/3) m g r_palm (`locoplan.sim.grasp`,
 # r_palm 0.04 m: a 5.3 cm lever): 3 cm uses 56 % of it and leaves the rest for the swing of
-# turns and steps (why only those boxes: `payload.behind_grips`).
+# turns and steps (why only those boxes: `payload.behind_grips`). Only 3 cm was tried, with
+# RAISE_UP_SHARE (figures in the CHANGELOG; 5-8 kg boxes 0.10-0.24 m deep).
 GRIP_BEHIND_CENTRE: Final = 0.03
 # The contact targets lie this far inside the object's sides, so that the hands' Cartesian PD
 # presses on the object (m).
