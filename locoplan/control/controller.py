@@ -55,7 +55,7 @@ from locoplan.control.wbc import (
 from locoplan.control.wbc_kernels import stack_tasks
 from locoplan.exceptions import SolverFailure
 from locoplan.plan import HAND_NAMES, ObjectHold, Plan
-from locoplan.plan.payload import grasp_reach_limit
+from locoplan.plan.payload import equal_margin_share, grasp_reach_limit
 from locoplan.robot.arm_range import narrowed_bounds, working_range
 from locoplan.robot.conventions import pin_base_rotation
 from locoplan.robot.description import RobotDescription
@@ -1511,9 +1511,7 @@ class LocoManipulationController:
         is (1 - beta) s further forward, toe margin t - c - (1 - beta) s. Equal margins:
         beta = 1/2 + (c - (t - h)/2) / s, clipped to [0, 1]. For HECTOR c = 0.015 m is the
         support's middle, so beta = 1/2 for every load: both margins are (t + h - s) / 2."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            beta = 0.5 + self._support_offset / np.asarray(size, dtype=float)
-        beta = np.clip(np.nan_to_num(beta, nan=0.5, posinf=1.0, neginf=0.0), 0.0, 1.0)
+        beta = equal_margin_share(size, self._support_offset)
         return beta + np.asarray(weight, dtype=float) * (1.0 - beta)
 
     def _lean_weights(self, t_lead: FloatArray) -> FloatArray:

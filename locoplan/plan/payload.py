@@ -42,6 +42,7 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+import numpy.typing as npt
 
 from locoplan.exceptions import RobotDescriptionError
 from locoplan.plan import constants as k
@@ -51,6 +52,8 @@ from locoplan.plan.hands import HandSegment, Vec3
 from locoplan.plan.manipulation import HAND_NAMES, ObjectHold
 from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
 from locoplan.scenario.model import LOCOMOTION_ACTIONS
+
+FloatArray = npt.NDArray[np.float64]
 
 if TYPE_CHECKING:
     # Imported when first needed (`_model`): statics pulls in pinocchio and, through the
@@ -221,12 +224,24 @@ def with_pre_leans(plan: Plan, robot: str) -> Plan:
     return replace(plan, manipulation=replace(plan.manipulation, holds=tuple(holds)))
 
 
+def equal_margin_share(size: npt.ArrayLike, offset: float) -> FloatArray:
+    """The equal-margin share beta (same shape as `size`) of a held load's CoM shift of size
+    `size` (m): beta = 1/2 + offset / size clipped to [0, 1], `offset` (m) how far the robot's
+    own CoM stands ahead of the middle of its feet's support; 1/2 for a zero size. Leaning
+    back by beta s leaves the unloaded robot and the loaded one equal margins to the heel and
+    the toe (`locoplan.control.controller`'s `_lean_share`, which uses it)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        beta = 0.5 + offset / np.asarray(size, dtype=float)
+    beta = np.nan_to_num(beta, nan=0.5, posinf=1.0, neginf=0.0)
+    return np.asarray(np.clip(beta, 0.0, 1.0), dtype=float)
+
+
 def lift_lean(model: StaticModel, pose: HeldPose, mass: float) -> float:
     """How far (m) the robot leans back before a lift-off of `mass` kg gripped in the grasp
     `pose`: the controller's equal-margin share of the load shift (`locoplan.control.
     controller._pre_lean`, `_lean_share`), beta s with s = m_o d / (m + m_o), d the hands'
-    midpoint ahead of the robot's CoM, and beta = 1/2 + (c - middle) / s clipped to [0, 1],
-    c the CoM and middle the feet's support's middle along x, in the grasp posture."""
+    midpoint ahead of the robot's CoM, and beta the `equal_margin_share` for the CoM's offset
+    from the middle of the feet's support along x, in the grasp posture."""
     arms_q, _, _ = model.postures.arms(pose)
     terms = model.postures.terms(arms_q, pose, 0.0)
     ahead = float(terms.p_load[0] - terms.com[0])
@@ -234,8 +249,7 @@ def lift_lean(model: StaticModel, pose: HeldPose, mass: float) -> float:
     if s <= 0.0:
         return 0.0
     middle = 0.5 * (model.support_x[0] + model.support_x[1])
-    beta = min(max(0.5 + (float(terms.com[0]) - middle) / s, 0.0), 1.0)
-    return beta * s
+    return float(equal_margin_share(s, float(terms.com[0]) - middle)) * s
 
 
 def behind_grips(plan: Plan, scenario: Scenario) -> frozenset[str]:
