@@ -10,6 +10,7 @@ from plan_fixtures import repo_scenario, scenario_files, scenario_from_text
 
 from locoplan.plan import PlanError, compile_plan
 from locoplan.plan.constants import GAIT_MIN_DOUBLE_SUPPORT
+from locoplan.plan.gait import start_lead
 from locoplan.scenario import load_scenario
 from locoplan.sim.robot_plan import compile_robot_plan
 
@@ -19,7 +20,8 @@ TIME_TOL = 1e-9  # float rounding of sums of a few decimal times
 @pytest.mark.parametrize("path", scenario_files(), ids=lambda p: p.stem)
 @pytest.mark.parametrize("strategy", ["dynamic", "quasi-static"])
 def test_feet_never_both_swing_and_swings_cover_locomotion(path, strategy) -> None:
-    plan = compile_robot_plan(load_scenario(path), strategy)
+    scenario = load_scenario(path)
+    plan = compile_robot_plan(scenario, strategy)
     times = np.linspace(-0.5, plan.t_end + 0.5, 20001)
     flags = plan.contact_flags(times)
     assert flags.any(axis=1).all(), "both feet in swing at once"
@@ -35,10 +37,12 @@ def test_feet_never_both_swing_and_swings_cover_locomotion(path, strategy) -> No
                 if task.start - TIME_TOL <= a < task.end
             ]
             assert swings, (task, foot)
-            if foot == "L":  # the left foot lifts off as the task starts
-                assert swings[0][0] == pytest.approx(task.start, abs=TIME_TOL)
+            block = next(b for b in plan.contacts.blocks if b.task_index == task.index)
+            if foot == "L":  # the left foot lifts off as the gait block starts
+                assert swings[0][0] == pytest.approx(block.start, abs=TIME_TOL)
+                lead = start_lead(task, scenario.gait.period, plan.geometry.settle_time)
+                assert block.start == pytest.approx(task.start + lead, abs=TIME_TOL)
             else:  # the right foot's last swing is in the task's last half cycle
-                block = next(b for b in plan.contacts.blocks if b.task_index == task.index)
                 assert swings[-1][0] == pytest.approx(task.end - block.period / 2, abs=TIME_TOL)
             assert all(b <= task.end - GAIT_MIN_DOUBLE_SUPPORT + TIME_TOL for _, b in swings)
     assert flags[~inside].all(), "a foot swings outside locomotion"
@@ -100,10 +104,53 @@ def test_swing_phase_and_next_touchdown() -> None:
     assert plan.next_touchdown("L", b) == nxt[1]
     assert plan.next_liftoff("L", b) == nxt[0]
     assert plan.stance_start("L", b + 0.01) == b
-    assert plan.stance_start("L", 0.0) == plan.swing_intervals("L")[0][1]  # swinging at 0
-    assert plan.stance_start("R", 0.0) is None  # initial stance
+    first = plan.swing_intervals("L")[0]
+    assert first[0] == pytest.approx(0.2)  # the start lead: half of step.yaml's 0.4 s period
+    assert plan.stance_start("L", 0.0) is None  # initial stance, shifting the weight
+    assert plan.stance_start("L", first[0]) == first[1]  # swinging
+    assert plan.stance_start("R", 0.0) is None
     assert plan.next_touchdown("L", plan.t_end) is None
-    assert plan.gait_period_at(mid) == pytest.approx(0.4)
+    assert plan.gait_period_at(mid) == pytest.approx(0.4, abs=0.01)
+
+
+def test_start_lead_shifts_the_weight_before_the_first_liftoff() -> None:
+    """A locomotion task at the simulation's start lifts its first foot after the robot's
+    pendulum time sqrt(z / g), at most half a gait period later, its cycles (as many as
+    without the lead) fitted into what is left; a task starting later (the MPC sees its
+    lift-off coming) keeps its start, and a short one keeps half a period per cycle."""
+    text = """
+version: 1
+name: lead
+gait: {period: 0.6, swing: 0.25}
+tasks:
+  - {action: turn, angle: -110, start: 0.0, duration: 3.0}
+  - {action: step, start: 3.5, duration: 1.2}
+"""
+    plan = compile_plan(scenario_from_text(text))
+    settle = plan.geometry.settle_time
+    assert settle == pytest.approx(math.sqrt(0.6 / 9.81))  # HECTOR's 0.60 m trunk height
+    turn, step = plan.contacts.blocks
+    assert turn.start == pytest.approx(settle) and turn.end == pytest.approx(3.0)
+    assert turn.cycles == 5 and turn.period == pytest.approx((3.0 - settle) / 5)
+    assert plan.swing_intervals("L")[0][0] == pytest.approx(settle)
+    assert plan.contact_flags(np.linspace(0.0, settle - 1e-6, 50)).all()
+    assert step.start == pytest.approx(3.5)  # no lead after 3.5 s of preview
+    quick = compile_plan(
+        scenario_from_text(text.replace("period: 0.6, swing: 0.25", "period: 0.4, swing: 0.15"))
+    )
+    assert quick.contacts.blocks[0].start == pytest.approx(0.2)  # half the period
+    assert quick.contacts.blocks[0].cycles == round(3.0 / 0.4)
+    late = compile_plan(
+        scenario_from_text(text.replace("start: 0.0, duration: 3.0", "start: 0.1, duration: 2.9"))
+    )
+    assert late.contacts.blocks[0].start == pytest.approx(settle)  # waits until settle only
+    short = "angle: -20, start: 0.0, duration: 0.35"
+    one = compile_plan(
+        scenario_from_text(text.replace("angle: -110, start: 0.0, duration: 3.0", short))
+    )
+    block = one.contacts.blocks[0]
+    assert block.cycles == 1 and block.period == pytest.approx(0.3)  # half of 0.6 left
+    assert block.start == pytest.approx(0.05)
 
 
 def test_overlapping_locomotion_is_refused() -> None:

@@ -161,7 +161,9 @@ def _assemble(
     checks; `centre_grips`: objects gripped at their centre (`payload.centre_grips`);
     `hover_ends`: the earliest end of the drops' hovers (`payload.reachable_hovers`);
     `behind_grips`: objects gripped nearer than their centre (`payload.behind_grips`)."""
-    contacts = build_contact_schedule(tasks, scenario.gait.period, scenario.gait.swing)
+    contacts = build_contact_schedule(
+        tasks, scenario.gait.period, scenario.gait.swing, geometry.settle_time
+    )
     start = scenario.robot_start
     trunk = build_trunk_path(
         tasks, start.position[0], start.position[1], math.radians(start.yaw), geometry.base_height

@@ -2,7 +2,8 @@
 
 During every locomotion task (step, walk, turn) the feet alternate with the scenario's gait:
 n = max(1, round(duration / period)) whole cycles fit the task exactly (period' = duration / n),
-the swing time is kept but capped at period' / 2 - GAIT_MIN_DOUBLE_SUPPORT. In each cycle
+the swing time is kept but capped at period' / 2 - GAIT_MIN_DOUBLE_SUPPORT. A task that starts
+the simulation first shifts the weight (`start_lead`): its n cycles fit what is left. In each cycle
 starting at c the LEFT foot swings on [c, c + swing), the RIGHT foot on
 [c + period'/2, c + period'/2 + swing). Outside locomotion both feet stand. Swing intervals are
 half-open: at the touchdown instant the foot is in stance again.
@@ -181,25 +182,51 @@ class ContactSchedule:
         return None
 
 
-def gait_block(task: PlannedTask, period: float, swing: float) -> GaitBlock:
-    """Fit whole gait cycles into a locomotion task (see the module docstring)."""
+def start_lead(task: PlannedTask, period: float, settle: float) -> float:
+    """How long (s) a locomotion task starting before `settle` s waits before its first
+    lift-off: until `settle`, but at most half a gait `period` (the time the other foot waits
+    anyway) and at most what leaves every cycle the task would have had half a period
+    (`gait_block` fits the same number of cycles into what is left).
+
+    Why: the MPC shifts the weight onto the stance foot before a lift-off that it sees
+    coming in its horizon. At the simulation's start it sees none: a task starting at 0 s
+    lifted the left foot with the CoM centred between the feet, the CoM fell towards the
+    swing side for the whole single support, and with swings of half the period (no double
+    support left to bring it back) the robot walked off sideways: stepping in place with a
+    0.5 s period and 0.25 s swings drifted 9.9 cm in 2.6 s, a -110 deg turn 17 cm (standing
+    1 s first: 0.3 and 2.8 cm; with the lead: 0.2 and 2.2 cm). `settle` is the robot's
+    pendulum time sqrt(z / g) (`PlanGeometry.settle_time`), the time the centre of pressure
+    held at one foot takes to move the CoM by a sizeable share of the half stance width.
+    The number of cycles is kept because the hip yaw bounds a turn per stance: refitting
+    whole cycles into what was left turned an H1 transfer's -54 deg in 0.85 s in one cycle
+    instead of two, and it fell (seed 57027, transfer-008)."""
+    if task.start >= settle:
+        return 0.0
     duration = task.end - task.start
-    n = max(1, round(duration / period))
-    p = duration / n
+    cycles = max(1, round(duration / period))
+    return max(0.0, min(settle - task.start, period / 2.0, duration - cycles * period / 2.0))
+
+
+def gait_block(task: PlannedTask, period: float, swing: float, lead: float = 0.0) -> GaitBlock:
+    """Fit whole gait cycles into a locomotion task (see the module docstring); with a `lead`
+    (`start_lead`), the same number of cycles into the task after it."""
+    n = max(1, round((task.end - task.start) / period))
+    p = (task.end - task.start - lead) / n
     s = min(swing, p / 2.0 - GAIT_MIN_DOUBLE_SUPPORT)
     if s <= 0.0:
         raise PlanError(
-            f"{task.action} lasts {duration:g} s: too short for one gait cycle with "
-            f"{GAIT_MIN_DOUBLE_SUPPORT:g} s of double support after each swing",
+            f"{task.action} lasts {task.end - task.start:g} s: too short for one gait cycle "
+            f"with {GAIT_MIN_DOUBLE_SUPPORT:g} s of double support after each swing",
             task.index,
         )
-    return GaitBlock(task.index, task.start, task.end, n, p, s)
+    return GaitBlock(task.index, task.start + lead, task.end, n, p, s)
 
 
 def build_contact_schedule(
-    tasks: tuple[PlannedTask, ...], period: float, swing: float
+    tasks: tuple[PlannedTask, ...], period: float, swing: float, settle: float = 0.0
 ) -> ContactSchedule:
-    """Contact schedule of the feet for the (sorted) planned tasks."""
+    """Contact schedule of the feet for the (sorted) planned tasks; no foot lifts off before
+    `settle` s (`start_lead`)."""
     blocks: list[GaitBlock] = []
     starts: tuple[list[float], list[float]] = ([], [])
     ends: tuple[list[float], list[float]] = ([], [])
@@ -215,7 +242,7 @@ def build_contact_schedule(
                 f"(until {last_end:g} s): two locomotion tasks cannot run at once",
                 task.index,
             )
-        block = gait_block(task, period, swing)
+        block = gait_block(task, period, swing, start_lead(task, period, settle))
         blocks.append(block)
         for k in range(block.cycles):
             c = block.start + k * block.period

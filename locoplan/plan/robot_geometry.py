@@ -68,6 +68,12 @@ class PlanGeometry:
     arm_moving_mass: float = k.ARM_MOVING_MASS
     tuck_lift_duration: float = k.TUCK_LIFT_DURATION
 
+    @property
+    def settle_time(self) -> float:
+        """The trunk's pendulum time sqrt(base_height / g) (s): how long the robot shifts
+        its weight before its first lift-off (`gait.start_lead`); HECTOR 0.247 s, H1 0.33 s."""
+        return math.sqrt(self.base_height / 9.81)
+
     def __post_init__(self) -> None:
         for name in (
             "base_height",
