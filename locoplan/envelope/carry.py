@@ -24,6 +24,7 @@ from locoplan.envelope.compose import (
     walk_limit,
     wrap_deg,
 )
+from locoplan.envelope.geometry import rects_apart
 
 GEOMETRY_TRIES = 20
 # m: side-carry keeps the table and the platform this far apart across the step, plus the
@@ -68,8 +69,10 @@ def walk_carry(d: Draw, name: str) -> Doc:
         placed = table_with_object(d, (0.0, 0.0), yaw0, mass)
         goal = target(d, (distance, 0.0), 0.0, "platform", max(placed.obj["size"][:2]))
         box = rect_of(placed.obj)
-        if fits(d, [rect_of(placed.table), rect_of(goal)], path, [box]) and fits(
-            d, [box, rect_of(goal)], path[:1]
+        if (
+            fits(d, [rect_of(placed.table), rect_of(goal)], path, [box])
+            and fits(d, [box, rect_of(goal)], path[:1])
+            and rects_apart(box, rect_of(goal), d.r.hand_room)
         ):
             break
     else:
@@ -97,7 +100,8 @@ def side_carry(d: Draw, name: str) -> Doc:
 
     The table and the platform stand side by side, so their widths across the step must
     fit in twice the step: FIXTURE_SIDE where that allows, else (steps under about 0.31 m)
-    as narrow as the box's width plus 3 cm (table) or 5 cm (platform)."""
+    as narrow as the box's width plus 3 cm (table) or 5 cm (platform). The platform keeps
+    `hand_room` from the box's side: the hand waits between them before the grasp."""
     gait = d.manip_gait()
     period = gait["period"]
     side = d.sign() * d.length(*rg.SIDE_STEP)
@@ -130,8 +134,10 @@ def side_carry(d: Draw, name: str) -> Doc:
         width = d.length(least, min(hi, free))
         goal = target(d, (0.0, side), 0.0, "platform", max(placed.obj["size"][:2]), width=width)
         box = rect_of(placed.obj)
-        if fits(d, [rect_of(placed.table), rect_of(goal)], path, [box]) and fits(
-            d, [box, rect_of(goal)], path[:1]
+        if (
+            fits(d, [rect_of(placed.table), rect_of(goal)], path, [box])
+            and fits(d, [box, rect_of(goal)], path[:1])
+            and rects_apart(box, rect_of(goal), d.r.hand_room)
         ):
             break
     else:

@@ -16,7 +16,7 @@ import math
 from dataclasses import dataclass
 
 from locoplan.envelope.geometry import ROBOT_RADIUS
-from locoplan.plan.constants import HIP_YAW_RANGE, WALK_STRIDE
+from locoplan.plan.constants import HAND_RADIUS, HIP_YAW_RANGE, WALK_STRIDE
 
 Range = tuple[float, float]
 
@@ -62,6 +62,10 @@ WALK_CARRY_DROP_LEAD: Range = (-0.3, 0.5)
 SIDE_STEP: Range = (0.3, 0.6)  # m, magnitude, to the left or the right
 SIDE_SPEED = 0.25  # m/s, at most
 SIDE_MASS: Range = (0.5, 5.0)  # kg
+# m, per side: the platform stands at least the hand's width plus this twice over from the
+# box's side, so that the hand waits between them before the grasp (the planner refuses less
+# than twice PREGRASP_GAP: `hand_paths.pregrasp_offset`; the rest is margin).
+HAND_ROOM_MARGIN = 0.01
 
 # --- standing hold: pick, stand holding it, put it back on the same table ---
 HOLD_MASS: Range = (0.5, 14.0)  # kg
@@ -101,7 +105,9 @@ class EnvelopeRanges:
     robot's path: `locoplan.envelope.geometry.ROBOT_RADIUS` for HECTOR); masses (kg):
     `transfer_mass`, `walk_carry_mass`, `side_mass`, `hold_mass`, `throw_mass`; gait
     limits: `walk_stride` (m) and `hip_yaw_range` (rad), those of the feasibility check
-    (`locoplan.scenario.feasibility`) that durations are stretched to meet."""
+    (`locoplan.scenario.feasibility`) that durations are stretched to meet; `hand_room` (m):
+    the least gap between a side-carry's box and the platform beside it (the hand's width
+    and HAND_ROOM_MARGIN on each side of it)."""
 
     robot: str = "hector"
     table_top: Range = TABLE_TOP
@@ -115,6 +121,7 @@ class EnvelopeRanges:
     throw_mass: Range = THROW_MASS
     walk_stride: float = WALK_STRIDE
     hip_yaw_range: float = HIP_YAW_RANGE
+    hand_room: float = round(2.0 * (HAND_RADIUS + HAND_ROOM_MARGIN), 3)
 
 
 HECTOR_RANGES = EnvelopeRanges()
@@ -183,6 +190,7 @@ def _envelope_ranges(robot: str) -> EnvelopeRanges:
         throw_mass=scaled(THROW_MASS),
         walk_stride=geo.walk_stride,
         hip_yaw_range=geo.hip_yaw_range,
+        hand_room=round(2.0 * (geo.hand_radius + HAND_ROOM_MARGIN), 3),
     )
 
 

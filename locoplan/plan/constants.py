@@ -216,6 +216,18 @@ GRIP_BEHIND_CENTRE: Final = 0.03
 # The contact targets lie this far inside the object's sides, so that the hands' Cartesian PD
 # presses on the object (m).
 GRASP_SQUEEZE: Final = 0.01
+# The least gap (m) the hand sphere keeps, where it waits beside an object before closing on
+# it, from the object's side and from anything else (`hand_paths.pregrasp_offset`): a
+# fixture nearer than that to every pre-grasp point between them leaves no room for the hand
+# and the pick is refused (`ManipulationPlan.pick`). Measured on side-carry scripts whose
+# platform stands beside the box (seeds 21-69021 on HECTOR, 21-59021 on H1; the pre-grasp
+# point between box and platform, entry paths as in `approach_segments`, no refusal): H1
+# fell in every run whose hand sphere cut into the platform there (7 runs, -2.5 to -0.5 cm)
+# and in one of the three with 0-0.4 cm to spare (0.1 cm), and in none of the 8 with 0.8-2.1
+# cm; HECTOR's smaller hands passed all 16 runs (8 scripts, both strategies) from -0.5 cm up.
+# Looked for on a PREGRASP_STEP grid.
+PREGRASP_GAP: Final = 0.005
+PREGRASP_STEP: Final = 0.002
 # How near (m) a hand point must come to an object's surface for the hand to close on it: the
 # simulator's grasp model (locoplan.sim.grasp) and the plan's reach check of a grasp
 # (locoplan.plan.payload) share it. The hand sphere (HAND_RADIUS) touches the surface at 2 cm,

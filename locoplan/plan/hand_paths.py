@@ -191,6 +191,65 @@ def beside(p: Vec3, d: float, lx: float, ly: float) -> Vec3:
     return (p[0] + d * lx, p[1] + d * ly, p[2])
 
 
+@dataclass(frozen=True, slots=True)
+class PreGrasp:
+    """Where a hand waits beside an object before closing on it: `offset` (m) of the hand
+    point outside the object's side, the hand sphere's `clearance` (m) there from the nearest
+    other obstacle, and that obstacle's `obstacle` name ("" when nothing is near)."""
+
+    offset: float
+    clearance: float
+    obstacle: str
+
+
+def pregrasp_offset(
+    grip: Vec3,
+    lateral: tuple[float, float],
+    half: float,
+    obstacles: tuple[Obstacle, ...],
+    t: float,
+    geo: PlanGeometry = HECTOR_GEOMETRY,
+) -> PreGrasp:
+    """Where the hand waits beside an object before closing on it: `grip` (m, world) is the
+    grip point on the object's centre line, `lateral` the unit vector (world, horizontal) from
+    it towards this hand's side, `half` the object's half width along it; `obstacles` what
+    else is there at t (s; not the object itself).
+
+    `geo.grasp_clearance` outside the side (the hand sphere 3 cm off it) unless something else
+    stands nearer the sphere there than the side does; then the offset that keeps the sphere
+    as far from both as it can (between the side and a platform beside the box: the middle),
+    down to PREGRASP_GAP off the side, on a PREGRASP_STEP grid. Why: the nominal point put
+    H1's hand 0.4 cm off a platform beside the box or up to 3.2 cm into it (side-carry, seeds
+    5021-17021), the hand hit the platform's edge in the reach and the robot fell backwards
+    (five of eight runs; those whose hand fits between now pass). Whether the hand fits at all
+    (`PreGrasp.clearance` at least PREGRASP_GAP) is the caller's check."""
+    lx, ly = lateral
+    r = geo.hand_radius
+
+    def clear(d: float) -> tuple[float, str]:
+        at = beside(grip, half + d, lx, ly)
+        best, name = math.inf, ""
+        for ob in obstacles:
+            c = ob.distance(at, t) - r
+            if c < best:
+                best, name = c, ob.name
+        return best, name
+
+    nominal = geo.grasp_clearance
+    c, name = clear(nominal)
+    if c >= nominal - r:
+        return PreGrasp(nominal, c, name if math.isfinite(c) else "")
+    best = PreGrasp(nominal, c, name)
+    least = r + k.PREGRASP_GAP
+    n = max(0, int((nominal - least) / k.PREGRASP_STEP + 1e-9))
+    for i in range(1, n + 1):
+        d = nominal - i * k.PREGRASP_STEP
+        c, name = clear(d)
+        if min(c, d - r) > min(best.clearance, best.offset - r):
+            best = PreGrasp(d, c, name)
+    return best
+
+
 def along(p: Vec3, d: float, u: Vec3) -> Vec3:
     """p moved by d along the unit vector u."""
     return (p[0] + d * u[0], p[1] + d * u[1], p[2] + d * u[2])
@@ -268,7 +327,12 @@ def approach_segments(
     against the 2.5 cm asked) in five of the repository's scenarios and 101 of seed 16339's 280
     manipulation runs (98 of them succeeded either way), and tried with entry paths that are not
     clear either, one that came 3.4 cm into a platform instead of 4 cm made a run that had
-    placed its parcel fall (seed 16339, quasi-static transfer-007).
+    placed its parcel fall (seed 16339, quasi-static transfer-007). When no entry path is clear
+    either, the clearest of them replaces the best path only if it keeps out of everything
+    (clearance >= 0) where the best runs into something: H1's left hand reaching past a
+    platform's near corner to a box beside it (side-carry, seed 16021's -016 and 5021's -002)
+    went 3.4-3.6 cm into the platform's edge by the straight reach and the robot fell
+    backwards; by way of the entry it keeps 0.5-1.8 cm and both place their box.
 
     Why the entry: in a pick during a turn, the object sweeps across the trunk frame while the
     hand reaches out, and a straight reach towards the point beside its far side cut through
@@ -383,7 +447,12 @@ def approach_segments(
     if gap(cand, t_free, t_end, threshold).first_below is None:
         return cand
     found, via_entry, _ = search(entry, best, best_c, only_clear=True)
-    return via_entry if found else best
+    if found:
+        return via_entry
+    # No path is clear either way: the clearest entry path, if it keeps out of everything
+    # while the best of the others runs into something.
+    _, clearest, clearest_c = search(entry, cand, gap(cand, t_free, t_end, threshold), False)
+    return clearest if clearest_c.minimum >= 0.0 else best
 
 
 def _entry_finish(

@@ -38,7 +38,7 @@ from typing import Literal
 
 from locoplan.plan import constants as k
 from locoplan.plan.clearance import Obstacle, fixture_obstacle, object_obstacle
-from locoplan.plan.errors import PlanError
+from locoplan.plan.errors import InfeasiblePlanError, PlanError
 from locoplan.plan.events import PlanEvent
 from locoplan.plan.geometry import (
     approach_direction,
@@ -50,6 +50,7 @@ from locoplan.plan.geometry import (
 from locoplan.plan.hand_paths import (
     HAND_NAMES,
     SIDE,
+    PreGrasp,
     along,
     approach_segments,
     beside,
@@ -61,6 +62,7 @@ from locoplan.plan.hand_paths import (
     grip_height,
     heavy_pull,
     initial_waypoint,
+    pregrasp_offset,
     pull_accel,
     rest_to_rest_distance,
     rest_to_rest_duration,
@@ -278,6 +280,23 @@ class _Builder:
                     task.index,
                 )
 
+    def _no_room_message(self, h: int, name: str, room: PreGrasp) -> str:
+        """Why the hand `h` cannot wait beside `name` before the grasp, and what would do:
+        `room` is the best place there was (`pregrasp_offset`). Between the side and the
+        obstacle (the offset above its least) the sphere gains half of what the obstacle
+        moves away; at its least offset all of it."""
+        what = room.obstacle.split(":", 1)[-1]
+        short = k.PREGRASP_GAP - room.clearance
+        between = room.offset > self.geom.hand_radius + k.PREGRASP_GAP + 1e-9
+        return (
+            f"infeasible (hand room): no room for the {HAND_NAMES[h]} hand beside '{name}' "
+            "before the grasp: "
+            f"wherever it waits between the side of '{name}' and '{what}', its sphere "
+            f"({2.0 * self.geom.hand_radius:.3f} m across) keeps at most "
+            f"{room.clearance:+.3f} m from '{what}' ({k.PREGRASP_GAP:.3f} m needed); move "
+            f"'{what}' {(2.0 if between else 1.0) * short:.3f} m further from '{name}'"
+        )
+
     def release_of(self, pick: PlannedTask) -> PlannedTask | None:
         """The first drop or throw of what `pick` picks up, starting after the pick starts
         (manipulation tasks never overlap, so after it ends), or None."""
@@ -449,9 +468,16 @@ class _Builder:
         # t_settle), it comes in to CARRY_FORWARD slowly enough not to set it swinging.
         swept = self.carry_top(task, obj, forward + back)
         carry_z = self._carry_height(obj, swept, gz + phases.raise_height, lift)
+        others = tuple(ob for ob in obstacles if ob.name != f"object:{name}")
         for h in hands:
             side = SIDE[h]
-            pre = beside((hx, hy, gz), side * (half + self.geom.grasp_clearance), lx, ly)
+            lateral = (side * lx, side * ly)
+            room = pregrasp_offset((hx, hy, gz), lateral, half, others, t_reach, geom)
+            if room.clearance < k.PREGRASP_GAP:
+                raise InfeasiblePlanError(
+                    self._no_room_message(h, name, room), task.index, loc=("tasks", task.index)
+                )
+            pre = beside((hx, hy, gz), side * (half + room.offset), lx, ly)
             # Beside the object's near corner, as far outside its near face as `pre` is
             # outside its side: where a reach that would cut the corner goes first.
             entry = beside(pre, -(depth + self.geom.grasp_clearance), ax, ay)
@@ -465,7 +491,7 @@ class _Builder:
             w_raised = HandWaypoint(raised, "world")
             w_carry = HandWaypoint(carry, "trunk")
             i = task.index
-            tuck_y = max(geom.hand_tuck_in_trunk[1], half + self.geom.grasp_clearance)
+            tuck_y = max(geom.hand_tuck_in_trunk[1], half + room.offset)
             approach = approach_segments(
                 h,
                 self.segments[h],
