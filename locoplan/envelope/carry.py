@@ -69,10 +69,8 @@ def walk_carry(d: Draw, name: str) -> Doc:
         placed = table_with_object(d, (0.0, 0.0), yaw0, mass)
         goal = target(d, (distance, 0.0), 0.0, "platform", max(placed.obj["size"][:2]))
         box = rect_of(placed.obj)
-        if (
-            fits(d, [rect_of(placed.table), rect_of(goal)], path, [box])
-            and fits(d, [box, rect_of(goal)], path[:1])
-            and rects_apart(box, rect_of(goal), d.r.hand_room)
+        if fits(d, [rect_of(placed.table), rect_of(goal)], path, [box]) and fits(
+            d, [box, rect_of(goal)], path[:1]
         ):
             break
     else:
