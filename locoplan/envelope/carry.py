@@ -131,11 +131,11 @@ def side_carry(d: Draw, name: str) -> Doc:
         least = lo if free >= lo else widths["box"] + 0.05
         width = d.length(least, min(hi, free))
         goal = target(d, (0.0, side), 0.0, "platform", max(placed.obj["size"][:2]), width=width)
-        box = rect_of(placed.obj)
+        box, goal_rect = rect_of(placed.obj), rect_of(goal)
         if (
-            fits(d, [rect_of(placed.table), rect_of(goal)], path, [box])
-            and fits(d, [box, rect_of(goal)], path[:1])
-            and rects_apart(box, rect_of(goal), d.r.hand_room)
+            fits(d, [rect_of(placed.table), goal_rect], path, [box])
+            and fits(d, [box, goal_rect], path[:1])
+            and rects_apart(box, goal_rect, d.r.hand_room)
         ):
             break
     else:

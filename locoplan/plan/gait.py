@@ -182,6 +182,11 @@ class ContactSchedule:
         return None
 
 
+def gait_cycles(task: PlannedTask, period: float) -> int:
+    """How many whole gait cycles a locomotion task holds: max(1, round(duration / period))."""
+    return max(1, round((task.end - task.start) / period))
+
+
 def start_lead(task: PlannedTask, period: float, settle: float) -> float:
     """How long (s) a locomotion task starting before `settle` s waits before its first
     lift-off: until `settle`, but at most half a gait `period` (the time the other foot waits
@@ -203,14 +208,14 @@ def start_lead(task: PlannedTask, period: float, settle: float) -> float:
     if task.start >= settle:
         return 0.0
     duration = task.end - task.start
-    cycles = max(1, round(duration / period))
+    cycles = gait_cycles(task, period)
     return max(0.0, min(settle - task.start, period / 2.0, duration - cycles * period / 2.0))
 
 
 def gait_block(task: PlannedTask, period: float, swing: float, lead: float = 0.0) -> GaitBlock:
     """Fit whole gait cycles into a locomotion task (see the module docstring); with a `lead`
     (`start_lead`), the same number of cycles into the task after it."""
-    n = max(1, round((task.end - task.start) / period))
+    n = gait_cycles(task, period)
     p = (task.end - task.start - lead) / n
     s = min(swing, p / 2.0 - GAIT_MIN_DOUBLE_SUPPORT)
     if s <= 0.0:

@@ -444,14 +444,15 @@ def approach_segments(
         return best
     # By way of the entry: only a clear path replaces the best one.
     cand = finish(start, cur, entry)
-    if gap(cand, t_free, t_end, threshold).first_below is None:
+    c_cand = gap(cand, t_free, t_end, threshold)
+    if c_cand.first_below is None:
         return cand
     found, via_entry, _ = search(entry, best, best_c, only_clear=True)
     if found:
         return via_entry
     # No path is clear either way: the clearest entry path, if it keeps out of everything
     # while the best of the others runs into something.
-    _, clearest, clearest_c = search(entry, cand, gap(cand, t_free, t_end, threshold), False)
+    _, clearest, clearest_c = search(entry, cand, c_cand, False)
     return clearest if clearest_c.minimum >= 0.0 else best
 
 
