@@ -25,6 +25,17 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 PositiveTime = Annotated[float, Field(gt=0.0, allow_inf_nan=False)]
 NonNegTime = Annotated[float, Field(ge=0.0, allow_inf_nan=False)]
 
+# A scene's lengths (positions, sizes, walk distances, drop points) stay within a kilometre
+# and its speeds (belts, throws) within 100 m/s. The format sets no bound, but a warehouse
+# cell is tens of metres and nothing the robot can do is faster than a few m/s: a larger value
+# is a typo (`1e308` for `1.08`) that would overflow the planner's clearance and reach
+# arithmetic (squares of 1e155 and more are inf) rather than be refused by it.
+MAX_LENGTH = 1000.0  # m
+MAX_SPEED = 100.0  # m/s
+Length = Annotated[float, Field(ge=-MAX_LENGTH, le=MAX_LENGTH, allow_inf_nan=False)]
+PositiveLength = Annotated[float, Field(gt=0.0, le=MAX_LENGTH, allow_inf_nan=False)]
+Speed = Annotated[float, Field(ge=-MAX_SPEED, le=MAX_SPEED, allow_inf_nan=False)]
+
 ACTIONS = ("stand", "step", "walk", "turn", "pick", "drop", "throw")
 LOCOMOTION_ACTIONS = ("step", "walk", "turn")
 MANIPULATION_ACTIONS = ("pick", "drop", "throw")
@@ -50,7 +61,7 @@ class RobotStart(_Strict):
     """Initial stance of the robot: trunk above `position`, facing `yaw`."""
 
     position: Annotated[
-        list[FiniteFloat],
+        list[Length],
         Field(min_length=2, max_length=2, description="[x, y] in the world frame, m"),
     ] = [0.0, 0.0]
     yaw: FiniteFloat = Field(0.0, description="heading, degrees, counter-clockwise from +x")
@@ -94,12 +105,12 @@ class ObjectSpec(_Strict):
 
     shape: Literal["box", "sphere"]
     size: Annotated[
-        list[Annotated[float, Field(gt=0.0, allow_inf_nan=False)]],
+        list[PositiveLength],
         Field(min_length=1, description="box: [x, y, z] full extents, sphere: [radius]; m"),
     ]
     mass: Annotated[float, Field(gt=0.0, le=1000.0, allow_inf_nan=False, description="mass, kg")]
     position: Annotated[
-        list[FiniteFloat],
+        list[Length],
         Field(min_length=3, max_length=3, description="centre [x, y, z], world frame, m"),
     ]
     yaw: FiniteFloat = Field(0.0, description="degrees, counter-clockwise")
@@ -122,7 +133,7 @@ class FixtureSpec(_Strict):
 
     kind: Literal["table", "conveyor", "platform"]
     position: Annotated[
-        list[FiniteFloat],
+        list[Length],
         Field(
             min_length=3,
             max_length=3,
@@ -130,7 +141,7 @@ class FixtureSpec(_Strict):
         ),
     ]
     size: Annotated[
-        list[Annotated[float, Field(gt=0.0, allow_inf_nan=False)]],
+        list[PositiveLength],
         Field(
             min_length=3,
             max_length=3,
@@ -138,7 +149,7 @@ class FixtureSpec(_Strict):
         ),
     ]
     yaw: FiniteFloat = Field(0.0, description="degrees, counter-clockwise")
-    speed: FiniteFloat | None = Field(
+    speed: Speed | None = Field(
         None, description="conveyor only: belt speed along its own x axis, m/s"
     )
 
@@ -189,7 +200,7 @@ class WalkTask(_TaskBase):
 
     action: Literal["walk"]
     distance: Annotated[
-        list[FiniteFloat],
+        list[Length],
         Field(min_length=2, max_length=2, description="[dx, dy], body frame at task start, m"),
     ]
     angle: Annotated[
@@ -224,7 +235,7 @@ class DropTask(_TaskBase):
     action: Literal["drop"]
     object: str = Field(description="name of the held object")
     onto: str | None = Field(None, description="name of a declared fixture")
-    at: Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)] | None = Field(
+    at: Annotated[list[Length], Field(min_length=3, max_length=3)] | None = Field(
         None, description="object centre [x, y, z], world frame, m"
     )
 
@@ -246,7 +257,7 @@ class ThrowTask(_TaskBase):
     action: Literal["throw"]
     object: str = Field(description="name of the held object")
     velocity: Annotated[
-        list[FiniteFloat],
+        list[Speed],
         Field(min_length=3, max_length=3, description="release velocity, body frame, m/s"),
     ]
 
