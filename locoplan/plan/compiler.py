@@ -228,8 +228,9 @@ def _assemble(
     )
 
 
-# The quickest turn (average rate, rad/s) that `_face_the_pick` plans: the locomotion
-# envelope's turns go up to 90 deg/s (README, Envelope), closed loop on every seed measured.
+# The quickest turn (average rate, rad/s) that `_face_the_pick` and `_wait_for_heavy_lifts`
+# plan: the locomotion envelope's turns go up to 90 deg/s (README, Envelope), closed loop on
+# every seed measured.
 HURRIED_TURN_RATE = math.radians(90.0)
 # The same while the robot carries another object through the turn: issue 12's transfers
 # turn loaded at up to 65 deg/s (README, Envelope), the fastest loaded turns measured.
@@ -445,7 +446,7 @@ def _wait_for_heavy_lifts(
     hip pitch saturates. Standing until the pick's end gives that pull its time, and the
     robot the time to recover from the lift. When the robot steps is the planner's
     to decide inside the written windows: the task keeps its end and its displacement, and
-    starts later only if that leaves it no quicker than HURRIED_LOADED_TURN_RATE /
+    starts later only if that leaves it no quicker than HURRIED_TURN_RATE /
     HURRIED_LOADED_WALK_SPEED on average and within the gait's rate limits
     (`locoplan.scenario.feasibility`); else it stays as written.
     Why: on the fresh seed 30103, four of the five dynamic walk-carries that fell (6.1-8 kg)
@@ -457,7 +458,18 @@ def _wait_for_heavy_lifts(
     dynamic walk-carry this re-times, seven seeds: 33 of 38 succeed, 27 without it (seeds
     11235, 13579, 24681, 30103: 22 of 24 against 15; tuning seeds 26457, 22360, 17320: 11 of
     14 against 12). With the old fast pull (the whole pull in the raise) it was -2 on the
-    seeds it was not found on, and it was not kept then."""
+    seeds it was not found on, and it was not kept then.
+    The re-timed turn may be quicker than a loaded turn as written (HURRIED_LOADED_TURN_RATE,
+    65 deg/s), up to the unloaded HURRIED_TURN_RATE: it turns with the object pulled in,
+    where one hip pitch holds it in single support and its yaw inertia about the trunk is
+    half, while the written turn steps with it still 0.33-0.43 m ahead (69021's
+    walk-carry-019: 7.1 kg, the stance hip pitch at its limit in every single support of the
+    turn, the trunk pitched 8 deg forward, a fall at 3.1 s). Capped at 65 deg/s, none of the
+    walk-carries below was re-timed. Measured on the dynamic walk-carries whose heavy pick a
+    turn starts inside (5.0-8.0 kg, written at 52-64 deg/s, re-timed 65-89 deg/s), seeds
+    1001-1003 (tuning) and 1004-1006 with 69021's two: 45 of 45 succeed re-timed, 36 as
+    written (the 9 falls carried 6.5-8.0 kg). Envelope seeds 67021-70021 hold 9 such
+    walk-carries in 120."""
     from locoplan.plan.hand_paths import heavy_pull, world_to_trunk
     from locoplan.plan.profiles import peak_rate
     from locoplan.scenario.feasibility import ceil_time, turn_rate_limit, walk_speed_limit
@@ -501,7 +513,7 @@ def _wait_for_heavy_lifts(
             continue
         amount = abs(loco.angle or 0.0)  # rad
         dist = math.hypot(*loco.distance) if loco.distance is not None else 0.0
-        if amount / duration > HURRIED_LOADED_TURN_RATE + 1e-9:
+        if amount / duration > HURRIED_TURN_RATE + 1e-9:
             continue
         if peak_rate(amount, duration) > turn_rate_limit(period, geometry.hip_yaw_range) + 1e-9:
             continue
