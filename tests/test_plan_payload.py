@@ -615,20 +615,31 @@ def test_a_drop_whose_object_would_end_at_the_edge_is_refused(x: float, refused:
     assert "0.12 m inside the edge" in msg and "allowed 0.09 m" in msg
 
 
-def test_a_fixture_a_million_km_away_is_refused_not_planned_forever(tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("x", "message"),
+    [
+        (900.0, "infeasible (reach): at the release of 'package'"),
+        (1.0e9, "position values must be <= 1000 m, got 1000000000.0"),
+    ],
+)
+def test_a_fixture_far_away_is_refused_not_planned_forever(
+    tmp_path: Path, x: float, message: str
+) -> None:
     """Found by the fuzz test: a fixture 1e9 m away made the drop's retreat last 9.5e9 s and
-    its clearance check sample it every 10 ms; `validate` never returned. A subprocess, so
-    that a hang fails on the timeout instead of holding the suite."""
+    its clearance check sample it every 10 ms; `validate` never returned. The format now
+    bounds a scene's lengths to 1000 m (`scenario.model.MAX_LENGTH`), so 1e9 m is refused as
+    a typo; 900 m, inside that bound, is refused by the plan's reach check in seconds. A
+    subprocess, so that a hang fails on the timeout instead of holding the suite."""
     import subprocess
     import sys
 
-    path = _write(tmp_path, _conveyor_at(1.0e9), "far.yaml")
+    path = _write(tmp_path, _conveyor_at(x), "far.yaml")
     res = subprocess.run(
         [sys.executable, "-m", "locoplan", "validate", str(path)],
         capture_output=True, text=True, timeout=120, check=False,
     )  # fmt: skip
     assert res.returncode == 2, res.stdout + res.stderr
-    assert "infeasible (reach): at the release of 'package'" in res.stdout
+    assert message in res.stdout
 
 
 def test_clearance_check_samples_a_long_segment_at_most_max_times() -> None:
