@@ -67,6 +67,13 @@ SIDE_MASS: Range = (0.5, 5.0)  # kg
 # than twice PREGRASP_GAP: `hand_paths.pregrasp_offset`; the rest is margin).
 HAND_ROOM_MARGIN = 0.01
 
+
+def side_carry_hand_room(hand_radius: float) -> float:
+    """The least gap (m) between a side-carry's box and the platform beside it for a hand of
+    `hand_radius` (m): the hand's width and HAND_ROOM_MARGIN on each side of it."""
+    return round(2.0 * (hand_radius + HAND_ROOM_MARGIN), 3)
+
+
 # --- standing hold: pick, stand holding it, put it back on the same table ---
 HOLD_MASS: Range = (0.5, 14.0)  # kg
 HOLD_TIME: Range = (2.0, 6.0)  # s, the stand task between pick and drop
@@ -121,7 +128,7 @@ class EnvelopeRanges:
     throw_mass: Range = THROW_MASS
     walk_stride: float = WALK_STRIDE
     hip_yaw_range: float = HIP_YAW_RANGE
-    hand_room: float = round(2.0 * (HAND_RADIUS + HAND_ROOM_MARGIN), 3)
+    hand_room: float = side_carry_hand_room(HAND_RADIUS)
 
 
 HECTOR_RANGES = EnvelopeRanges()
@@ -190,7 +197,7 @@ def _envelope_ranges(robot: str) -> EnvelopeRanges:
         throw_mass=scaled(THROW_MASS),
         walk_stride=geo.walk_stride,
         hip_yaw_range=geo.hip_yaw_range,
-        hand_room=round(2.0 * (geo.hand_radius + HAND_ROOM_MARGIN), 3),
+        hand_room=side_carry_hand_room(geo.hand_radius),
     )
 
 

@@ -478,8 +478,9 @@ class _Builder:
                     self._no_room_message(h, name, room), task.index, loc=("tasks", task.index)
                 )
             pre = beside((hx, hy, gz), side * (half + room.offset), lx, ly)
-            # Beside the object's near corner, as far outside its near face as `pre` is
-            # outside its side: where a reach that would cut the corner goes first.
+            # Beside the object's near corner, grasp_clearance outside its near face (as `pre`
+            # is outside its side unless a fixture beside the object brings the hand in:
+            # `pregrasp_offset`): where a reach that would cut the corner goes first.
             entry = beside(pre, -(depth + self.geom.grasp_clearance), ax, ay)
             touch = beside((hx, hy, gz), side * (half + geom.hand_radius), lx, ly)
             grip = beside((hx, hy, gz), side * (half - k.GRASP_SQUEEZE), lx, ly)
