@@ -7,7 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from locoplan.control.support import clamp_into_support, convex_hull, foot_segments
+from locoplan.control.support import (
+    chord_offsets,
+    clamp_into_support,
+    convex_hull,
+    foot_segments,
+)
 
 TOE, HEEL = 0.09, 0.06
 
@@ -59,3 +64,31 @@ def test_feet_too_close_for_the_margin_give_the_centroid() -> None:
     hull = _stance(width=0.02)
     out = clamp_into_support(np.array([0.0, 0.5]), hull, 0.02)
     np.testing.assert_allclose(out, hull.mean(axis=0), atol=1e-12)
+
+
+def test_chord_offsets_measure_a_point_from_the_middle_of_the_support_along_each_direction() -> (
+    None
+):
+    """Two parallel feet side by side: along x the chord runs from the heel (-HEEL) to the toe
+    (TOE), whose middle is (TOE - HEEL) / 2 ahead of the sole line, so a point at x stands
+    x - (TOE - HEEL) / 2 ahead of it; backwards the sign turns; across (y) the chord's middle
+    is the stance's middle line. A point outside the hull, or a hull of fewer than three
+    vertices, gives NaN."""
+    hull = _stance()
+    dirs = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]])
+    for x, y in [(0.0, 0.0), (0.03, 0.02), (-0.04, -0.05)]:
+        got = chord_offsets(np.array([x, y]), dirs, hull)
+        np.testing.assert_allclose(got, [x - (TOE - HEEL) / 2, (TOE - HEEL) / 2 - x, y], atol=1e-12)
+    assert np.isnan(chord_offsets(np.array([0.2, 0.0]), dirs, hull)).all()
+    assert np.isnan(chord_offsets(np.zeros(2), dirs, hull[:2])).all()
+
+
+def test_chord_offsets_of_staggered_feet_see_the_back_edge_between_the_heels() -> None:
+    """Left foot at x = 0, right foot 0.04 m ahead (a walk's last step landing ahead of its
+    plan): on the middle line y = 0 the back edge runs between the heels, at -HEEL + 0.02,
+    and the front edge between the toes, at TOE + 0.02; the point x = 0 stands 0.02 m plus
+    (TOE - HEEL) / 2 behind the middle of that chord."""
+    feet = np.array([[0.0, 0.08, 0.0], [0.04, -0.08, 0.0]])
+    hull = convex_hull(foot_segments(feet, np.zeros(2), TOE, HEEL))
+    got = chord_offsets(np.zeros(2), np.array([[1.0, 0.0]]), hull)
+    assert got[0] == pytest.approx(-(0.02 + (TOE - HEEL) / 2), abs=1e-12)

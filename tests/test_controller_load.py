@@ -16,6 +16,7 @@ from locoplan.control.controller import (
     LocoManipulationController,
     rigid_pair_targets,
 )
+from locoplan.control.support import chord_offsets, convex_hull, foot_segments
 from locoplan.plan import compile_plan
 from locoplan.plan.payload import grasp_reach_limit
 from locoplan.robot.description import load_robot_description
@@ -67,6 +68,53 @@ def test_com_shift_keeps_leaning_back_while_the_hands_hold_the_load() -> None:
         assert mass[0] > 0.05 * hold.mass, t
         assert shift[0] < -0.05 * mass[0] / (ctl.mass + mass[0]), (t, shift)
         np.testing.assert_allclose(shift, expected, atol=1e-3)
+
+
+def test_the_release_lean_leaves_equal_margins_on_the_feet_as_they_landed() -> None:
+    """At a drop's release (lean weight 0: the equal-margin share) with the feet standing
+    where they landed, not where the plan put them (the right foot 4 cm ahead, the left 1 cm:
+    a walk's last step placed by the capture point), the CoM shift that `_com_shift` returns
+    for the measured support leaves the unloaded robot's CoM as far inside the back of the
+    feet's hull as the loaded combined CoM is inside its front, along the load's direction,
+    to 1e-9 m (`chord_offsets` measures both ends); with the plan's nominal offset the
+    robot's CoM would stand 2.5 cm nearer the back edge (envelope seed 72021, walk-carry-007,
+    fell backwards after its release)."""
+    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    (hold,) = plan.holds
+    t = np.array([hold.release])  # the lead time at the release: lean weight 0
+    assert ctl._lean_weights(t)[0] == pytest.approx(0.0, abs=1e-12)
+    mass = np.array([hold.mass])
+    p_com, *_ = ctl._com_reference(t)
+    sole = p_com[0, :2] - ctl.com_offset[:2]
+    feet = np.array([[sole[0] + 0.01, 0.09, 0.0], [sole[0] + 0.04, -0.09, 0.0]])
+    hull = convex_hull(foot_segments(feet, np.zeros(2), desc.foot_toe, desc.foot_heel))
+    p = p_com[0, :2]
+    measured = ctl._com_shift(t, mass, p_com, (p, hull))[0]
+    nominal = ctl._com_shift(t, mass, p_com)[0]
+    obj = plan.object_positions(np.array([hold.release - 1e-4]))[0]
+    s = hold.mass / (ctl.mass + hold.mass) * (obj[:2] - p[:2])
+    u = s / np.linalg.norm(s)
+    robot, combined = p + measured, p + measured + s
+    room_back, _ = _chord_ends(robot, u, hull)
+    _, room_front = _chord_ends(combined, u, hull)
+    assert room_back > 0.0 and room_front > 0.0
+    assert room_back == pytest.approx(room_front, abs=1e-9)
+    # The plan's nominal share leans 2 cm further back, to 2 cm less heel room.
+    assert float(np.dot(measured - nominal, u)) > 0.02
+    assert np.isfinite(chord_offsets(p, u[None], hull)).all()
+
+
+def _chord_ends(p: np.ndarray, u: np.ndarray, hull: np.ndarray) -> tuple[float, float]:
+    """Room (m) from p (2,) to the hull's edge behind it and ahead of it along u (2,)."""
+    edges = np.roll(hull, -1, axis=0) - hull
+    normals = np.column_stack([edges[:, 1], -edges[:, 0]])
+    room = np.einsum("ij,ij->i", normals, hull) - normals.dot(p)
+    nu = normals.dot(u)
+    ahead = min(r / n for r, n in zip(room, nu, strict=True) if n > 1e-12)
+    behind = min(r / -n for r, n in zip(room, nu, strict=True) if n < -1e-12)
+    return behind, ahead
 
 
 TURN_BETWEEN_FIXTURES = """

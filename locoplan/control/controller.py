@@ -42,7 +42,12 @@ from locoplan.control.recovery import (
     plan_recovery_step,
     support_hull,
 )
-from locoplan.control.support import clamp_into_support, convex_hull, foot_segments
+from locoplan.control.support import (
+    chord_offsets,
+    clamp_into_support,
+    convex_hull,
+    foot_segments,
+)
 from locoplan.control.swing import min_jerk, smoothstep, smoothstep_array, swing_point
 from locoplan.control.tasks import TaskGains, rot_z, rotation_error
 from locoplan.control.wbc import (
@@ -944,8 +949,28 @@ class LocoManipulationController:
             [times, [t], [x for _, x in keys], t_lead if loaded else np.zeros(0)]
         )
         p_all, v_all, yaw_all, w_all, pb_all = self._com_reference(eval_times)
+        contact = self.recovery.flags(times, np.asarray(plan.contact_flags(times), dtype=bool))
+        standing = bool(contact.all())
+        hull = (
+            convex_hull(
+                foot_segments(p_feet_now, yaw_feet_now, self.desc.foot_toe, self.desc.foot_heel)
+            )
+            if standing
+            else None
+        )
+        if hull is not None:
+            # Standing through the horizon: the reference over the feet (STAND_SUPPORT_MARGIN).
+            inside = clamp_into_support(p_all[0, :2], hull, STAND_SUPPORT_MARGIN)
+            self._stand_offset = inside - p_all[0, :2]
+        else:
+            self._stand_offset = np.zeros(2)
         shift = (
-            self._com_shift(t_lead, mass_lead, p_all[N + 1 + n_td :])
+            self._com_shift(
+                t_lead,
+                mass_lead,
+                p_all[N + 1 + n_td :],
+                None if hull is None else (p_all[0, :2] + self._stand_offset, hull),
+            )
             if loaded
             else np.zeros((N + 1, 2))
         )
@@ -959,17 +984,7 @@ class LocoManipulationController:
         x_ref[:, 8] = w_ref
         x_ref[:, 9:12] = v_ref
         x_ref[:, 14] = -GRAVITY
-        contact = self.recovery.flags(times, np.asarray(plan.contact_flags(times), dtype=bool))
-        if contact.all():
-            # Standing through the horizon: the reference over the feet (STAND_SUPPORT_MARGIN).
-            hull = convex_hull(
-                foot_segments(p_feet_now, yaw_feet_now, self.desc.foot_toe, self.desc.foot_heel)
-            )
-            inside = clamp_into_support(x_ref[0, 3:5], hull, STAND_SUPPORT_MARGIN)
-            self._stand_offset = inside - x_ref[0, 3:5]
-            x_ref[:, 3:5] += self._stand_offset
-        else:
-            self._stand_offset = np.zeros(2)
+        x_ref[:, 3:5] += self._stand_offset
         p_feet = np.repeat(p_feet_now[None], N, axis=0)
         foot_yaw = np.repeat(yaw_feet_now[None], N, axis=0)
         self._footholds.clear()
@@ -1378,7 +1393,13 @@ class LocoManipulationController:
             out += h.mass * frac
         return out
 
-    def _com_shift(self, t_lead: FloatArray, mass: FloatArray, p_com: FloatArray) -> FloatArray:
+    def _com_shift(
+        self,
+        t_lead: FloatArray,
+        mass: FloatArray,
+        p_com: FloatArray,
+        support: tuple[FloatArray, FloatArray] | None = None,
+    ) -> FloatArray:
         """CoM reference shift (n, 2) for held loads: the robot's CoM moves away from the
         object by the share `_lean_share` of s = m_o d / (m + m_o), the shift that would put
         the combined CoM of robot and object where the robot's own CoM stands unloaded
@@ -1406,7 +1427,9 @@ class LocoManipulationController:
         counts.
 
         From the lead times t_lead (n,) (the times concerned + LOAD_LEAD), the carried mass
-        there (n,) kg and the CoM reference there (n, 3) m."""
+        there (n,) kg and the CoM reference there (n, 3) m; `support` is (p, hull) while both
+        feet stand through the horizon: the CoM reference now (2,) over the feet and the
+        feet's support polygon (`_lean_share`'s offset then comes from where the feet are)."""
         d = self._planned_object_positions(self._held_times(t_lead))[:, :2] - p_com[:, :2]
         d_now = (
             self._planned_object_positions(self._held_times(t_lead - LOAD_LEAD))[:, :2]
@@ -1415,7 +1438,14 @@ class LocoManipulationController:
         far = np.einsum("ij,ij->i", d_now, d_now) > np.einsum("ij,ij->i", d, d)
         d = np.where(far[:, None], d_now, d)
         s = (mass / (self.mass + mass))[:, None] * d
-        share = self._lean_share(np.linalg.norm(s, axis=1), self._lean_weights(t_lead))
+        size = np.linalg.norm(s, axis=1)
+        offset: FloatArray | None = None
+        if support is not None:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                unit = np.where(size[:, None] > 1e-9, s / size[:, None], 0.0)
+            offset = chord_offsets(support[0], unit, support[1])
+            offset = np.where(np.isfinite(offset), offset, self._support_offset)
+        share = self._lean_share(size, self._lean_weights(t_lead), offset)
         shift = -share[:, None] * s
         pre = self._pre_lean(t_lead - LOAD_LEAD, p_com)
         bigger = np.einsum("ij,ij->i", pre, pre) > np.einsum("ij,ij->i", shift, shift)
@@ -1487,7 +1517,9 @@ class LocoManipulationController:
         t0 = max(hold.lift - T, 0.0)
         return t0, max(hold.lift, t0 + 1e-3)
 
-    def _lean_share(self, size: FloatArray, weight: FloatArray) -> FloatArray:
+    def _lean_share(
+        self, size: FloatArray, weight: FloatArray, offset: FloatArray | None = None
+    ) -> FloatArray:
         """Share (n,) of the full load shift of size `size` (n,) m that the CoM reference
         takes, for the lean weights `weight` (n,) (`_lean_weights`): the equal-margin share
         beta plus `weight` of the rest, beta + w (1 - beta).
@@ -1510,8 +1542,18 @@ class LocoManipulationController:
         c - beta s ahead of the sole site, heel margin h + c - beta s; the loaded combined CoM
         is (1 - beta) s further forward, toe margin t - c - (1 - beta) s. Equal margins:
         beta = 1/2 + (c - (t - h)/2) / s, clipped to [0, 1]. For HECTOR c = 0.015 m is the
-        support's middle, so beta = 1/2 for every load: both margins are (t + h - s) / 2."""
-        beta = equal_margin_share(size, self._support_offset)
+        support's middle, so beta = 1/2 for every load: both margins are (t + h - s) / 2.
+
+        `offset` (n,) m, where given, replaces c - (t - h) / 2, the nominal CoM's offset from
+        the middle of the support: while both feet stand it is measured on the feet as they
+        landed (`_com_shift`), how far the standing reference stands ahead of the middle of
+        the support polygon's chord along the load's direction. Why: a walk's last step
+        lands by the capture point, 1-5 cm from its plan, and the reference stays the plan's;
+        the nominal share then left the unloaded robot's CoM behind the heels of feet that
+        had landed ahead of it (HECTOR envelope seed 72021, walk-carry-007, 6.42 kg: right
+        foot 4.8 cm and left 1.3 cm ahead of the plan, CoM reference 0.1 cm inside the hull's
+        back edge after the lean, fall backwards 0.6 s after the release, both strategies)."""
+        beta = equal_margin_share(size, self._support_offset if offset is None else offset)
         return beta + np.asarray(weight, dtype=float) * (1.0 - beta)
 
     def _lean_weights(self, t_lead: FloatArray) -> FloatArray:

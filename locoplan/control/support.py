@@ -81,3 +81,30 @@ def clamp_into_support(p: FloatArray, hull: FloatArray, margin: float) -> FloatA
             if d < best_d:
                 best, best_d = c, d
     return best if best is not None else np.asarray(hull, dtype=float).mean(axis=0)
+
+
+def chord_offsets(p: FloatArray, directions: FloatArray, hull: FloatArray) -> FloatArray:
+    """How far (n,) m the point p (2,) stands ahead of the middle of the convex polygon
+    `hull` (m, 2, CCW) along each unit direction of `directions` (n, 2): the middle of the
+    chord through p along that direction, whose ends are where p + l u leaves the polygon,
+    lies at l = (l_back + l_front) / 2, and p stands -(l_back + l_front) / 2 ahead of it.
+    NaN where the hull has fewer than three vertices or p lies outside it."""
+    u = np.asarray(directions, dtype=float)
+    out = np.full(len(u), np.nan)
+    m = len(hull)
+    if m < 3:
+        return out
+    p = np.asarray(p, dtype=float)
+    edges = np.roll(hull, -1, axis=0) - hull
+    normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # outward for a CCW polygon
+    room = np.einsum("ij,ij->i", normals, hull) - normals.dot(p)  # n . (p + l u) <= n . v
+    if np.any(room < 0.0):
+        return out
+    nu = u.dot(normals.T)  # (n, m)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lam = room[None, :] / nu
+    front = np.where(nu > 1e-12, lam, np.inf).min(axis=1)
+    back = np.where(nu < -1e-12, lam, -np.inf).max(axis=1)
+    ok = np.isfinite(front) & np.isfinite(back)
+    out[ok] = -0.5 * (front[ok] + back[ok])
+    return out

@@ -224,14 +224,14 @@ def with_pre_leans(plan: Plan, robot: str) -> Plan:
     return replace(plan, manipulation=replace(plan.manipulation, holds=tuple(holds)))
 
 
-def equal_margin_share(size: npt.ArrayLike, offset: float) -> FloatArray:
+def equal_margin_share(size: npt.ArrayLike, offset: float | npt.ArrayLike) -> FloatArray:
     """The equal-margin share beta (same shape as `size`) of a held load's CoM shift of size
     `size` (m): beta = 1/2 + offset / size clipped to [0, 1], `offset` (m) how far the robot's
     own CoM stands ahead of the middle of its feet's support; 1/2 for a zero size. Leaning
     back by beta s leaves the unloaded robot and the loaded one equal margins to the heel and
     the toe (`locoplan.control.controller`'s `_lean_share`, which uses it)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        beta = 0.5 + offset / np.asarray(size, dtype=float)
+        beta = 0.5 + np.asarray(offset, dtype=float) / np.asarray(size, dtype=float)
     beta = np.nan_to_num(beta, nan=0.5, posinf=1.0, neginf=0.0)
     return np.asarray(np.clip(beta, 0.0, 1.0), dtype=float)
 
