@@ -20,9 +20,11 @@ contact patches transmit a torsional friction torque about that axis.
 damper about the grip axis keeps the object at the orientation it had relative to the trunk at
 the grasp (wrists, which HECTOR's 3-DoF arms lack, would keep a held box's attitude; so a box
 picked level stays level whatever the elbows do), critically damped at PALM_BOND_FREQUENCY for
-the object's own inertia about the axis, and capped at the palms' friction limit (4/3) m g
-r_palm: each palm squeezes with N = m g / mu, twice what holding the weight by friction needs,
-and a uniformly pressed disc of radius r_palm transmits (2/3) mu N r_palm. The cap exceeds the
+the object's own inertia about the axis (more for an object gripped off its centre, so that its
+weight's moment deflects it at most PALM_BOND_DEFLECTION: `palm_bond_frequency`), and capped
+at the palms' friction limit (4/3) m g r_palm: each palm squeezes with N = m g / mu, twice what
+holding the weight by friction needs, and a uniformly pressed disc of radius r_palm transmits
+(2/3) mu N r_palm. The cap exceeds the
 largest gravity torque of a held box (gripped at most GRASP_ABOVE_CENTRE = 0.04 m off its
 centre) for any mass, so a held box hangs level and swings only as far as an inertial torque
 beyond the cap pushes it. The reaction goes to the two hand bodies in equal halves, so momentum
@@ -56,6 +58,34 @@ BELT_GAIN = 20.0  # 1/s: how fast the belt's friction brings an object to belt s
 BELT_MU = 0.8  # belt friction coefficient for the drag clamp
 PALM_RADIUS = 0.04  # m, radius of the palm contact patch (an 8 cm wide hand)
 PALM_BOND_FREQUENCY = 20.0  # rad/s, natural frequency of the palm bond (critically damped)
+# Largest deflection (rad) the weight's moment about the grip line may give a held object in
+# the palm bond: the bond's frequency is raised, per object, until its stiffness I w^2 holds
+# m g d (d the object's centre of mass's horizontal distance from the line through the two
+# hands, measured when the grasp closes) within it (`palm_bond_frequency`). Why: I w^2 scales
+# with the box's size squared while m g d does not; at 20 rad/s a 0.10 m box gripped 3 cm
+# behind its centre (the planner's GRIP_BEHIND_CENTRE) deflects 25 deg. HECTOR seed 73021's
+# transfer-004 (5.83 kg, 0.109 x 0.115 x 0.122 m, gripped 2.5 cm behind) hung 15-18 deg
+# nose-down, its far bottom corner 4 cm under the plan's box, caught the 0.548 m platform's
+# edge in the turn and the robot fell. 3 deg is what pressed palm pads give before they slip
+# (the friction cap still bounds the torque). Raising the frequency for every object instead
+# (60 rad/s) sank the 14 kg standing hold's block back onto its table (its arms take the
+# bond's reaction). Explicit at the 1 ms physics step: w dt stays far below 1 (0.05 for the
+# 0.10 m box).
+PALM_BOND_DEFLECTION = math.radians(3.0)
+
+
+def palm_bond_frequency(mass: float, inertia_axis: float, offset: float) -> float:
+    """Natural frequency (rad/s) of the palm bond of an object of `mass` kg whose inertia
+    about the grip line's direction through its centre is `inertia_axis` kg m^2 and whose
+    centre of mass stands `offset` m (horizontally) off the grip line: PALM_BOND_FREQUENCY, or
+    more where the weight's moment m g d would deflect the bond beyond PALM_BOND_DEFLECTION,
+    w^2 = m g d / (I PALM_BOND_DEFLECTION)."""
+    if inertia_axis <= 0.0:
+        return PALM_BOND_FREQUENCY
+    need = mass * GRAVITY * abs(offset) / (inertia_axis * PALM_BOND_DEFLECTION)
+    return max(PALM_BOND_FREQUENCY, math.sqrt(need))
+
+
 GRAVITY = 9.81
 
 
@@ -99,6 +129,8 @@ class GraspManager:
         ]
 
         self._palm_refs: dict[str, FloatArray] = {}
+        # Each held object's palm-bond frequency (rad/s, `palm_bond_frequency`).
+        self._palm_freq: dict[str, float] = {}
         m = scene.model
         self._hand_geoms = {
             g
@@ -138,7 +170,7 @@ class GraspManager:
             # The object's inertia tensor in the world frame (principal axes R_i).
             R_i = data.ximat[ob].reshape(3, 3)
             inertia = R_i @ np.diag(m.body_inertia[ob]) @ R_i.T
-            w = PALM_BOND_FREQUENCY
+            w = self._palm_freq.get(name, PALM_BOND_FREQUENCY)
             torque = -(inertia @ (w * w * err + 2.0 * w * rate))
             cap = (4.0 / 3.0) * float(m.body_mass[ob]) * GRAVITY * PALM_RADIUS
             size = float(np.linalg.norm(torque))
@@ -189,6 +221,29 @@ class GraspManager:
                 total += float(f_world[2]) if g2 == obj_geom else -float(f_world[2])
         return total
 
+    def _bond_frequency(self, name: str, hands: tuple[int, ...], data: mujoco.MjData) -> float:
+        """`palm_bond_frequency` of object `name` as the grasp closes: the grip line through
+        the two hand points, the object's inertia about that direction through its centre
+        (world inertia tensor from its principal axes) and its centre's horizontal distance
+        from the line. PALM_BOND_FREQUENCY for a one-handed grasp."""
+        if len(hands) != 2:
+            return PALM_BOND_FREQUENCY
+        a, b = (data.site_xpos[self._hand_sites[k]] for k in hands)
+        line = b - a
+        size = float(np.linalg.norm(line))
+        if size < 1e-9:
+            return PALM_BOND_FREQUENCY
+        u = line / size
+        ob = self.scene.object_body_ids[name]
+        m = self.scene.model
+        R_i = data.ximat[ob].reshape(3, 3)
+        inertia = R_i @ np.diag(m.body_inertia[ob]) @ R_i.T
+        # The weight's moment about the line is m g (z x u) . r, r from a hand point to the
+        # centre: its lever, the centre's horizontal distance across the line.
+        across = np.cross(np.array([0.0, 0.0, 1.0]), u)
+        lever = float((data.xipos[ob] - a).dot(across))
+        return palm_bond_frequency(float(m.body_mass[ob]), float(u @ inertia @ u), lever)
+
     def held_objects(self) -> set[str]:
         """Objects currently welded to a hand."""
         return {h.hold.object for h in self.holds if h.state == "grasped"}
@@ -210,6 +265,7 @@ class GraspManager:
                     R_obj = data.xmat[self.scene.object_body_ids[name]].reshape(3, 3)
                     R_trunk = data.xmat[self._trunk_body].reshape(3, 3)
                     self._palm_refs[name] = R_trunk.T @ R_obj
+                    self._palm_freq[name] = self._bond_frequency(name, hs.hands, data)
                     hs.state = "grasped"
                     hs.grasp_time = t
                     events.append(("grasp", {"object": name, "gap_m": round(max(gaps), 4)}))
