@@ -1548,7 +1548,7 @@ class LocoManipulationController:
         the middle of the support: while both feet stand it is measured on the feet as they
         landed (`_com_shift`), how far the standing reference stands ahead of the middle of
         the support polygon's chord along the load's direction. Why: a walk's last step
-        lands by the capture point, 1-5 cm from its plan, and the reference stays the plan's;
+        lands by the capture point, 1-8 cm from its plan, and the reference stays the plan's;
         the nominal share then left the unloaded robot's CoM behind the heels of feet that
         had landed ahead of it (HECTOR envelope seed 72021, walk-carry-007, 6.42 kg: right
         foot 4.8 cm and left 1.3 cm ahead of the plan, CoM reference 0.1 cm inside the hull's

@@ -21,16 +21,15 @@ damper about the grip axis keeps the object at the orientation it had relative t
 the grasp (wrists, which HECTOR's 3-DoF arms lack, would keep a held box's attitude; so a box
 picked level stays level whatever the elbows do), critically damped at PALM_BOND_FREQUENCY for
 the object's own inertia about the axis (more for an object gripped off its centre, so that its
-weight's moment deflects it at most PALM_BOND_DEFLECTION: `palm_bond_frequency`), and capped
-at the palms' friction limit (4/3) m g r_palm: each palm squeezes with N = m g / mu, twice what
+weight's moment deflects it at most PALM_BOND_DEFLECTION: `palm_bond_frequency`), and capped at
+the palms' friction limit (4/3) m g r_palm: each palm squeezes with N = m g / mu, twice what
 holding the weight by friction needs, and a uniformly pressed disc of radius r_palm transmits
-(2/3) mu N r_palm. The cap exceeds the
-largest gravity torque of a held box (gripped at most GRASP_ABOVE_CENTRE = 0.04 m off its
-centre) for any mass, so a held box hangs level and swings only as far as an inertial torque
-beyond the cap pushes it. The reaction goes to the two hand bodies in equal halves, so momentum
-is conserved. The bond acts on every object held by two hands: without it the 14 kg standing
-hold pitched its block 35-60 deg in the grasp and, once the robot's retreat from the table
-began, fell forward; with it the block stays level.
+(2/3) mu N r_palm. The cap exceeds the largest gravity torque of a held box (gripped at most
+GRASP_ABOVE_CENTRE = 0.04 m off its centre) for any mass, so a held box hangs level and swings
+only as far as an inertial torque beyond the cap pushes it. The reaction goes to the two hand
+bodies in equal halves, so momentum is conserved. The bond acts on every object held by two
+hands: without it the 14 kg standing hold pitched its block 35-60 deg in the grasp and, once the
+robot's retreat from the table began, fell forward; with it the block stays level.
 
 Conveyor. A belt moving at `speed` along the conveyor's own x axis drags objects resting on it
 by friction: a horizontal force c m (v_belt - v_object), clamped to mu m g, while the object
@@ -57,6 +56,7 @@ GRASP_WINDOW = 0.25  # s after the planned lift-off the grasp may still close
 BELT_GAIN = 20.0  # 1/s: how fast the belt's friction brings an object to belt speed
 BELT_MU = 0.8  # belt friction coefficient for the drag clamp
 PALM_RADIUS = 0.04  # m, radius of the palm contact patch (an 8 cm wide hand)
+GRAVITY = 9.81
 PALM_BOND_FREQUENCY = 20.0  # rad/s, natural frequency of the palm bond (critically damped)
 # Largest deflection (rad) the weight's moment about the grip line may give a held object in
 # the palm bond: the bond's frequency is raised, per object, until its stiffness I w^2 holds
@@ -69,7 +69,7 @@ PALM_BOND_FREQUENCY = 20.0  # rad/s, natural frequency of the palm bond (critica
 # edge in the turn and the robot fell. 3 deg is what pressed palm pads give before they slip
 # (the friction cap still bounds the torque). Raising the frequency for every object instead
 # (60 rad/s) sank the 14 kg standing hold's block back onto its table (its arms take the
-# bond's reaction). Explicit at the 1 ms physics step: w dt stays far below 1 (0.05 for the
+# bond's reaction). Explicit at the 1 ms physics step: w dt stays far below 1 (0.06 for the
 # 0.10 m box).
 PALM_BOND_DEFLECTION = math.radians(3.0)
 
@@ -84,9 +84,6 @@ def palm_bond_frequency(mass: float, inertia_axis: float, offset: float) -> floa
         return PALM_BOND_FREQUENCY
     need = mass * GRAVITY * abs(offset) / (inertia_axis * PALM_BOND_DEFLECTION)
     return max(PALM_BOND_FREQUENCY, math.sqrt(need))
-
-
-GRAVITY = 9.81
 
 
 @dataclass(slots=True)
