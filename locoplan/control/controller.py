@@ -950,20 +950,15 @@ class LocoManipulationController:
         )
         p_all, v_all, yaw_all, w_all, pb_all = self._com_reference(eval_times)
         contact = self.recovery.flags(times, np.asarray(plan.contact_flags(times), dtype=bool))
-        standing = bool(contact.all())
-        hull = (
-            convex_hull(
+        hull: FloatArray | None = None
+        self._stand_offset = np.zeros(2)
+        if contact.all():
+            # Standing through the horizon: the reference over the feet (STAND_SUPPORT_MARGIN).
+            hull = convex_hull(
                 foot_segments(p_feet_now, yaw_feet_now, self.desc.foot_toe, self.desc.foot_heel)
             )
-            if standing
-            else None
-        )
-        if hull is not None:
-            # Standing through the horizon: the reference over the feet (STAND_SUPPORT_MARGIN).
             inside = clamp_into_support(p_all[0, :2], hull, STAND_SUPPORT_MARGIN)
             self._stand_offset = inside - p_all[0, :2]
-        else:
-            self._stand_offset = np.zeros(2)
         shift = (
             self._com_shift(
                 t_lead,

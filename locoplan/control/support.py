@@ -51,6 +51,15 @@ def convex_hull(points: FloatArray) -> FloatArray:
     return np.array(lower[:-1] + upper[:-1])
 
 
+def _half_planes(hull: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The convex polygon `hull` (m, 2, CCW) as half-planes n . x <= c: unit outward normals
+    (m, 2), one per edge from vertex i to i + 1, and their offsets c (m,)."""
+    edges = np.roll(hull, -1, axis=0) - hull
+    normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # outward for a CCW polygon
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    return normals, np.einsum("ij,ij->i", normals, hull)
+
+
 def clamp_into_support(p: FloatArray, hull: FloatArray, margin: float) -> FloatArray:
     """The point (2,) nearest to p (2,) inside the convex polygon `hull` (m, 2, CCW) shrunk by
     `margin` m; p itself when it is inside. Where the shrunk polygon is empty (the feet too
@@ -59,10 +68,8 @@ def clamp_into_support(p: FloatArray, hull: FloatArray, margin: float) -> FloatA
     m = len(hull)
     if m < 3:
         return np.asarray(hull, dtype=float).mean(axis=0) if m else p
-    edges = np.roll(hull, -1, axis=0) - hull
-    normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # outward for a CCW polygon
-    normals /= np.linalg.norm(normals, axis=1)[:, None]
-    offsets = np.einsum("ij,ij->i", normals, hull) - margin  # n . x <= offset inside
+    normals, offsets = _half_planes(hull)
+    offsets = offsets - margin  # n . x <= offset inside, shrunk
     tol = 1e-12
     if np.all(normals.dot(p) <= offsets + tol):
         return p
@@ -95,9 +102,8 @@ def chord_offsets(p: FloatArray, directions: FloatArray, hull: FloatArray) -> Fl
     if m < 3:
         return out
     p = np.asarray(p, dtype=float)
-    edges = np.roll(hull, -1, axis=0) - hull
-    normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # outward for a CCW polygon
-    room = np.einsum("ij,ij->i", normals, hull) - normals.dot(p)  # n . (p + l u) <= n . v
+    normals, offsets = _half_planes(hull)
+    room = offsets - normals.dot(p)  # n . (p + l u) <= n . v
     if np.any(room < 0.0):
         return out
     nu = u.dot(normals.T)  # (n, m)

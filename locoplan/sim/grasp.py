@@ -164,9 +164,7 @@ class GraspManager:
             err = np.zeros(3)
             mujoco.mju_quat2Vel(err, quat, 1.0)
             rate = data.cvel[ob, 0:3] - data.cvel[tb, 0:3]
-            # The object's inertia tensor in the world frame (principal axes R_i).
-            R_i = data.ximat[ob].reshape(3, 3)
-            inertia = R_i @ np.diag(m.body_inertia[ob]) @ R_i.T
+            inertia = self._world_inertia(data, ob)
             w = self._palm_freq.get(name, PALM_BOND_FREQUENCY)
             torque = -(inertia @ (w * w * err + 2.0 * w * rate))
             cap = (4.0 / 3.0) * float(m.body_mass[ob]) * GRAVITY * PALM_RADIUS
@@ -218,6 +216,12 @@ class GraspManager:
                 total += float(f_world[2]) if g2 == obj_geom else -float(f_world[2])
         return total
 
+    def _world_inertia(self, data: mujoco.MjData, body: int) -> FloatArray:
+        """Inertia tensor (3, 3) kg m^2 of `body` about its centre, in world axes (its
+        principal axes R_i: R_i diag(I) R_i^T)."""
+        R_i = data.ximat[body].reshape(3, 3)
+        return np.asarray(R_i @ np.diag(self.scene.model.body_inertia[body]) @ R_i.T)
+
     def _bond_frequency(self, name: str, hands: tuple[int, ...], data: mujoco.MjData) -> float:
         """`palm_bond_frequency` of object `name` as the grasp closes: the grip line through
         the two hand points, the object's inertia about that direction through its centre
@@ -233,8 +237,7 @@ class GraspManager:
         u = line / size
         ob = self.scene.object_body_ids[name]
         m = self.scene.model
-        R_i = data.ximat[ob].reshape(3, 3)
-        inertia = R_i @ np.diag(m.body_inertia[ob]) @ R_i.T
+        inertia = self._world_inertia(data, ob)
         # The weight's moment about the line is m g (z x u) . r, r from a hand point to the
         # centre: its lever, the centre's horizontal distance across the line.
         across = np.cross(np.array([0.0, 0.0, 1.0]), u)
