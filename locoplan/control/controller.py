@@ -748,9 +748,9 @@ class LocoManipulationController:
         yaw_ref: float,
     ) -> None:
         """Add a recovery step (`locoplan.control.recovery`) for the CoM p_c (3,) moving at
-        v_c (3,) when the robot stands, the plan has both feet down for the step and a
-        swing's settling after it, the hands touch nothing (`hand_contact_flags`),
-        no recovery step is under way or settling, and the capture point lies more than
+        v_c (3,) when the robot stands, the plan has both feet down and the hands touching
+        nothing (`hand_contact_flags`) for the step and a swing's settling after it, no
+        recovery step is under way or settling, and the capture point lies more than
         RECOVERY_MARGIN outside the soles."""
         swing = self.plan.gait_swing
         if self.recovery.busy(t, swing):
@@ -758,14 +758,18 @@ class LocoManipulationController:
         ahead = t + np.linspace(0.0, RECOVERY_LEAD + 2.0 * swing, 8)
         if not bool(np.all(self.plan.contact_flags(ahead))):
             return
-        if bool(np.any(self.plan.hand_contact_flags(np.array([t])))):
+        if bool(np.any(self.plan.hand_contact_flags(ahead))):
             # Not while the hands hold or grip something. The capture point is a point mass's;
             # a held load is a second mass the arms and the CoM shift move about (or its
             # support still carries), which it does not describe: lifting 10-13 kg blocks,
             # HECTOR's capture point (of robot and load together, or of the robot alone)
             # left its soles by 2-6 cm while it stood through the lift, and the steps taken
             # then set off a cascade of steps and a fall (seed 44021, standing-hold-006,
-            # -013).
+            # -013). Nor when they will before the step is done: the trunk leaning back
+            # before a 12.6 kg lift took the capture point past the heels just before the
+            # grasp (the step lifted off 0.05 s after it), and the left foot rose as the block
+            # came off its table; the stance hip pitch saturated and the robot fell (seed 76021,
+            # standing-hold-014, both strategies). Without the step it holds the block.
             return
         xi = capture_point(p_c, v_c, self._capture_gain)
         toe, heel = self.desc.foot_toe, self.desc.foot_heel

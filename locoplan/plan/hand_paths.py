@@ -318,7 +318,8 @@ def approach_segments(
 
     If neither is clear, the clearest one wins (the largest smallest clearance, ties within
     CLEARANCE_TIE going to the larger next-smallest: `Clearance.better_than`), unless that one
-    runs the hand into something (a negative clearance) and an `entry` is given (a "world" point
+    runs the hand into something (a negative clearance), or comes within OBJECT_GRAZE of an
+    object (not a fixture: a grazed object is pushed), and an `entry` is given (a "world" point
     level with the target, beside the near corner of the object the target is beside): then the
     same paths are tried again going to `entry` first and sliding from there to `target` along
     the object's side ("slide", `_entry_finish`), and the first clear one is taken. Only then
@@ -332,7 +333,14 @@ def approach_segments(
     (clearance >= 0) where the best runs into something: H1's left hand reaching past a
     platform's near corner to a box beside it (side-carry, seed 16021's -016 and 5021's -002)
     went 3.4-3.6 cm into the platform's edge by the straight reach and the robot fell
-    backwards; by way of the entry it keeps 0.5-1.8 cm and both place their box.
+    backwards; by way of the entry it keeps 0.5-1.8 cm and both place their box. A path that
+    only grazes an object is replaced by a clear entry path only.
+
+    When every path still runs into something, the hand goes over the fixtures it runs into
+    that are higher than the target (`_over_waypoint`): straight to the point above the target
+    and down onto it, or else risen close to the body to that height and out from there, the
+    latest such reach that is clear and no faster than the arms' free-move acceleration;
+    only a clear one replaces the best path.
 
     Why the entry: in a pick during a turn, the object sweeps across the trunk frame while the
     hand reaches out, and a straight reach towards the point beside its far side cut through
@@ -440,20 +448,100 @@ def approach_segments(
         return False, best, best_c
 
     found, best, best_c = search(None, direct, c_direct, only_clear=False)
-    if found or entry is None or best_c.minimum >= 0.0:
+    grazes = any(
+        ob.name.startswith("object:") and gap < k.OBJECT_GRAZE
+        for ob, gap in zip(obstacles, best_c.by_obstacle, strict=True)
+    )
+    if found or (best_c.minimum >= 0.0 and not grazes):
         return best
-    # By way of the entry: only a clear path replaces the best one.
-    cand = finish(start, cur, entry)
-    c_cand = gap(cand, t_free, t_end, threshold)
-    if c_cand.first_below is None:
+    if entry is not None:
+        # By way of the entry: only a clear path replaces the best one.
+        cand = finish(start, cur, entry)
+        c_cand = gap(cand, t_free, t_end, threshold)
+        if c_cand.first_below is None:
+            return cand
+        found, via_entry, _ = search(entry, best, best_c, only_clear=True)
+        if found:
+            return via_entry
+        # No path is clear either way: the clearest entry path, if it keeps out of
+        # everything while the best of the others runs into something.
+        _, clearest, clearest_c = search(entry, cand, c_cand, False)
+        if clearest_c.minimum >= 0.0 > best_c.minimum:
+            return clearest
+    if best_c.minimum >= 0.0:
+        return best  # it grazes an object, and no path by way of its corner is clear
+    # Every path runs into something: over the top of the fixtures it runs into, if that
+    # is clear (only then: it adds a descent onto the target).
+    over = _over_waypoint(target, best_c, obstacles, threshold, trunk, geo)
+    if over is None:
+        return best
+    cand = finish(start, cur, over)
+    if gap(cand, t_free, t_end, threshold).first_below is None:
         return cand
-    found, via_entry, _ = search(entry, best, best_c, only_clear=True)
-    if found:
-        return via_entry
-    # No path is clear either way: the clearest entry path, if it keeps out of everything
-    # while the best of the others runs into something.
-    _, clearest, clearest_c = search(entry, cand, c_cand, False)
-    return clearest if clearest_c.minimum >= 0.0 else best
+    # Tucked, risen close to the body to the height of `over` and out from there, no faster
+    # than the arms' free-move acceleration: the latest such reach that is clear (the hands
+    # stay in as long as they can: a reach that starts early, while the object is still
+    # behind, is blended across the chest, where the arm cannot follow).
+    raised = lifted_tuck_waypoint(hand, tuck_y, over, trunk, geo)
+    x, y, yaw, *_ = trunk.pose_at(t_end)
+    c, s = math.cos(yaw), math.sin(yaw)
+    rx, ry, rz = raised.point
+    out = (x + c * rx - s * ry, y + s * rx + c * ry, trunk.height + rz)
+    need = rest_to_rest_duration(math.dist(out, over.point), geo.hand_accel_limit)
+    moves = [HandSegment(t_free, t_free + tuck_time, cur, tuck, task_index, "tuck")]
+    t_first = t_free + tuck_time + geo.tuck_lift_duration
+    n = int((t_end - need - t_first) / k.REACH_START_STEP + 1e-9)
+    for j in range(n, -1, -1):
+        t_r = t_first + j * k.REACH_START_STEP
+        cand = [
+            *(moves if tuck_time else []),
+            HandSegment(t_r - geo.tuck_lift_duration, t_r, tuck, raised, task_index, "lift"),
+            *finish(t_r, raised, over),
+        ]
+        if cand[-2].t1 - t_r < need:
+            continue
+        if gap(cand, t_free, t_end, threshold).first_below is None:
+            return cand
+    return best
+
+
+def _over_waypoint(
+    target: HandWaypoint,
+    best: Clearance,
+    obstacles: tuple[Obstacle, ...],
+    threshold: tuple[float, ...],
+    trunk: TrunkPath,
+    geo: PlanGeometry,
+) -> HandWaypoint | None:
+    """The point (world) above a "world" `target` from which an over-the-top approach comes
+    down onto it, or None (a "trunk" target, or nothing to go over): as high as the highest
+    top of the fixtures that the `best` path comes within their `threshold` (m, in the order
+    of `obstacles`) of, plus the hand's radius, the clearance asked for and the trunk's
+    position error that the check allows for (TRUNK_POSITION_ERROR, which a trunk-relative
+    stretch of the path moves by), if that is above the target.
+
+    Why: a pick during a turn reaches across the trunk frame while the trunk turns, and the
+    right hand of a robot turning left to a table passes the platform beside it; where that
+    platform's top is a few cm above the grasp height, every level path (straight, tucked,
+    by the object's near corner) cuts its corner. HECTOR envelope seed 71021, transfer-028:
+    the best path went 4 cm into a platform 1.7 cm higher than the grasp; the hand met it at
+    1.2 s and pushed the trunk 10 cm off its turn, the grasp closed 10 cm off the parcel's
+    centre, the parcel hung 20-30 deg and snagged the platform's corner. HECTOR seed 76021,
+    transfer-031: the left hand's level path, at the platform's top (0.1 cm above it), went
+    2.9 cm into its edge; in MuJoCo the hand leant on the platform for 1.2 s in the turn, the
+    trunk drifted 13 cm and the robot fell in both strategies."""
+    if target.frame != "world":
+        return None
+    tx, ty, tz = target.point
+    tops = [
+        ob.center[2] + ob.half[2]
+        for ob, gap, limit in zip(obstacles, best.by_obstacle, threshold, strict=True)
+        if ob.name.startswith("fixture:") and gap < limit
+    ]
+    if not tops:
+        return None
+    z = max(tops) + geo.hand_radius + k.APPROACH_CLEARANCE + k.TRUNK_POSITION_ERROR
+    return HandWaypoint((tx, ty, z), "world") if z > tz else None
 
 
 def _entry_finish(
