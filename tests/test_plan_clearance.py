@@ -22,6 +22,7 @@ from locoplan.plan.clearance import (
 )
 from locoplan.plan.hand_paths import default_waypoint
 from locoplan.plan.hands import HandSegment, HandWaypoint, make_track
+from locoplan.plan.robot_geometry import HECTOR_GEOMETRY
 
 EXACT = 1e-12  # closed-form distances, float rounding only
 MIN_GAP = 0.01  # m, planned hand-sphere clearance with the trunk off its plan (see _phases_clear)
@@ -199,8 +200,10 @@ def test_pick_walk_drop_retreat_clears_the_placed_box() -> None:
 
 
 def test_the_default_pose_would_sweep_into_the_package() -> None:
-    # Why the left hand tucks in: held at the default pose through the first turn it would
-    # pass through the package (the failure the tuck fixes).
+    # Why the left hand starts tucked in: held at the default pose through the first turn it
+    # would pass through the package (the failure the tuck fixes). Tucked, and out by way of
+    # the package's near corner (its straight reach came 0.85 cm from the package, within
+    # OBJECT_GRAZE), it keeps the pre-grasp clearance until it squeezes.
     scenario = repo_scenario("package-transfer")
     plan = compile_plan(scenario)
     obj = scenario.objects["package"]
@@ -208,8 +211,13 @@ def test_the_default_pose_would_sweep_into_the_package() -> None:
     idle = make_track("L", default_waypoint(0), [])
     c = track_clearance(idle, plan.trunk, (package,), 0.0, 1.6, 0.0, yaw_offsets=(0.0,))
     assert c.minimum < 0.0
-    tuck = next(g for g in plan.manipulation.tracks[0].segments if g.label == "tuck")
-    assert tuck.t1 < c.time  # tucked in before the default pose would have hit it
+    left = plan.manipulation.tracks[0]
+    x, y, z = HECTOR_GEOMETRY.hand_tuck_in_trunk
+    assert left.segments[0].start == HandWaypoint((x, y, z), "trunk")
+    assert left.segments[0].t0 < c.time  # out before the default pose would have hit it
+    squeeze = next(g.t0 for g in left.segments if g.label == "squeeze")
+    ours = track_clearance(left, plan.trunk, (package,), 0.0, squeeze, -math.inf)
+    assert ours.minimum >= k.APPROACH_CLEARANCE - 1e-6
 
 
 def test_drop_on_a_belt_opens_the_downstream_hand_wider() -> None:
