@@ -336,11 +336,12 @@ def approach_segments(
     backwards; by way of the entry it keeps 0.5-1.8 cm and both place their box. A path that
     only grazes an object is replaced by a clear entry path only.
 
-    When every path still runs into something, the hand goes over the fixtures it runs into
-    that are higher than the target (`_over_waypoint`): straight to the point above the target
-    and down onto it, or else risen close to the body to that height and out from there, the
-    latest such reach that is clear and no faster than the arms' free-move acceleration;
-    only a clear one replaces the best path.
+    When every path still runs into something, the hand goes over the fixtures it comes too
+    near, where their tops (plus the hand's radius and margins) are above the target
+    (`_over_waypoint`): straight to the point above the target and down onto it, or else
+    risen close to the body to that height and out from there, the latest such reach that is
+    clear and no faster than the arms' free-move acceleration; only a clear one replaces the
+    best path.
 
     Why the entry: in a pick during a turn, the object sweeps across the trunk frame while the
     hand reaches out, and a straight reach towards the point beside its far side cut through
@@ -449,8 +450,8 @@ def approach_segments(
 
     found, best, best_c = search(None, direct, c_direct, only_clear=False)
     grazes = any(
-        ob.name.startswith("object:") and gap < k.OBJECT_GRAZE
-        for ob, gap in zip(obstacles, best_c.by_obstacle, strict=True)
+        ob.name.startswith("object:") and near < k.OBJECT_GRAZE
+        for ob, near in zip(obstacles, best_c.by_obstacle, strict=True)
     )
     if found or (best_c.minimum >= 0.0 and not grazes):
         return best
@@ -472,7 +473,7 @@ def approach_segments(
         return best  # it grazes an object, and no path by way of its corner is clear
     # Every path runs into something: over the top of the fixtures it runs into, if that
     # is clear (only then: it adds a descent onto the target).
-    over = _over_waypoint(target, best_c, obstacles, threshold, trunk, geo)
+    over = _over_waypoint(target, best_c, obstacles, threshold, geo)
     if over is None:
         return best
     cand = finish(start, cur, over)
@@ -510,7 +511,6 @@ def _over_waypoint(
     best: Clearance,
     obstacles: tuple[Obstacle, ...],
     threshold: tuple[float, ...],
-    trunk: TrunkPath,
     geo: PlanGeometry,
 ) -> HandWaypoint | None:
     """The point (world) above a "world" `target` from which an over-the-top approach comes
@@ -535,8 +535,8 @@ def _over_waypoint(
     tx, ty, tz = target.point
     tops = [
         ob.center[2] + ob.half[2]
-        for ob, gap, limit in zip(obstacles, best.by_obstacle, threshold, strict=True)
-        if ob.name.startswith("fixture:") and gap < limit
+        for ob, near, limit in zip(obstacles, best.by_obstacle, threshold, strict=True)
+        if ob.name.startswith("fixture:") and near < limit
     ]
     if not tops:
         return None
