@@ -409,6 +409,18 @@ def approach_segments(
     # point above it would cut the table's near edge.
     lifted = lifted_tuck_waypoint(hand, tuck_y, target, trunk, geo)
 
+    def tucked(
+        t_tuck0: float, t_tuck1: float, t_r: float, risen: HandWaypoint, via: HandWaypoint | None
+    ) -> list[HandSegment]:
+        """A tucked path: the tuck on [t_tuck0, t_tuck1] (none for a hand that rests tucked),
+        the rise close to the body to `risen` ending at t_r, then `finish` by way of `via`."""
+        moves = [HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")] if tuck_time else []
+        return [
+            *moves,
+            HandSegment(t_r - geo.tuck_lift_duration, t_r, tuck, risen, task_index, "lift"),
+            *finish(t_r, risen, via),
+        ]
+
     def search(
         via: HandWaypoint | None, best: list[HandSegment], best_c: Clearance, only_clear: bool
     ) -> tuple[bool, list[HandSegment], Clearance]:
@@ -423,20 +435,11 @@ def approach_segments(
             t_tuck0 = max(t_free, t_tuck1 - tuck_time)
             if tuck_time > 0.0 and t_tuck1 <= t_tuck0:
                 break
-            moves = (
-                [HandSegment(t_tuck0, t_tuck1, cur, tuck, task_index, "tuck")] if tuck_time else []
-            )
             t_first = t_tuck1 + geo.tuck_lift_duration
             n = int((t_end - k.REACH_MIN_DURATION - t_first) / k.REACH_START_STEP + 1e-9)
             for j in range(n + 1):
                 t_r = t_first + j * k.REACH_START_STEP
-                cand = [
-                    *moves,
-                    HandSegment(
-                        t_r - geo.tuck_lift_duration, t_r, tuck, lifted, task_index, "lift"
-                    ),
-                    *finish(t_r, lifted, via),
-                ]
+                cand = tucked(t_tuck0, t_tuck1, t_r, lifted, via)
                 c = gap(cand, t_tuck0, t_end, threshold)
                 better = not only_clear and c.better_than(best_c)
                 if c.first_below is None and (only_clear or better):
@@ -484,21 +487,13 @@ def approach_segments(
     # stay in as long as they can: a reach that starts early, while the object is still
     # behind, is blended across the chest, where the arm cannot follow).
     raised = lifted_tuck_waypoint(hand, tuck_y, over, trunk, geo)
-    x, y, yaw, *_ = trunk.pose_at(t_end)
-    c, s = math.cos(yaw), math.sin(yaw)
-    rx, ry, rz = raised.point
-    out = (x + c * rx - s * ry, y + s * rx + c * ry, trunk.height + rz)
-    need = rest_to_rest_duration(math.dist(out, over.point), geo.hand_accel_limit)
-    moves = [HandSegment(t_free, t_free + tuck_time, cur, tuck, task_index, "tuck")]
+    reach = math.dist(raised.point, world_to_trunk(trunk, t_end, over.point))
+    need = rest_to_rest_duration(reach, geo.hand_accel_limit)
     t_first = t_free + tuck_time + geo.tuck_lift_duration
     n = int((t_end - need - t_first) / k.REACH_START_STEP + 1e-9)
     for j in range(n, -1, -1):
         t_r = t_first + j * k.REACH_START_STEP
-        cand = [
-            *(moves if tuck_time else []),
-            HandSegment(t_r - geo.tuck_lift_duration, t_r, tuck, raised, task_index, "lift"),
-            *finish(t_r, raised, over),
-        ]
+        cand = tucked(t_free, t_free + tuck_time, t_r, raised, over)
         if cand[-2].t1 - t_r < need:
             continue
         if gap(cand, t_free, t_end, threshold).first_below is None:
