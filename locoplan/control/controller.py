@@ -40,6 +40,7 @@ from locoplan.control.recovery import (
     capture_point,
     distance_outside,
     plan_recovery_step,
+    plan_square_up_step,
     support_hull,
 )
 from locoplan.control.support import (
@@ -141,6 +142,12 @@ POSITION_CONVERGENCE_TIME = 2.2
 # seed 44021 (README).
 RECOVERY_MARGIN = 0.01
 RECOVERY_LEAD = 0.05
+# Square-up steps (`locoplan.control.recovery.plan_square_up_step`): a foot whose distance
+# from the centre of its standing nominal places exceeds half the stance width by more than
+# SQUARE_UP_EXCESS widths steps back, lifting SQUARE_UP_LEAD swings after the decision.
+# PROTOTYPE figures.
+SQUARE_UP_EXCESS = 0.25
+SQUARE_UP_LEAD = 1.0
 FEET = ("L", "R")
 # Task rows a limb's end carries: a line foot 5 (position, foot pitch and yaw; stance or
 # swing), a point hand 3 (position). A limb with more joints than that is redundant.
@@ -452,7 +459,8 @@ class ControllerSettings:
     swing_kd_rot: float = 80.0
     swing_height: float = 0.08
     raibert_gain: float = 0.05
-    # Whether the controller adds recovery steps (`locoplan.control.recovery`).
+    # Whether the controller adds steps to the plan (`locoplan.control.recovery`): recovery
+    # steps for a capture point outside the soles, square-up steps for a foot left far off.
     recovery_steps: bool = True
     # Whether the trunk leans back for a held load (`locoplan.control.lean`). Off: measured
     # about neutral on fresh envelope seeds (README, Envelope; CHANGELOG, Known limitations).
@@ -790,6 +798,40 @@ class LocoManipulationController:
             RECOVERY_LEAD,
             swing,
         )
+        if self.plan.footprints:
+            self._off_footprints(step.target, step.yaw)
+        self.recovery.steps.append(step)
+
+    def _square_up(
+        self, t: float, p_c: FloatArray, v_c: FloatArray, p_feet: FloatArray, yaw_feet: FloatArray
+    ) -> None:
+        """Add a square-up step (`locoplan.control.recovery.plan_square_up_step`) when the
+        robot stands at rest (its capture point inside the soles) under the conditions of
+        `_recover`, one of its feet far from its nominal place about the plan's CoM reference
+        (where `_foothold_from` puts a foot of a CoM at rest on its reference), lifting
+        SQUARE_UP_LEAD gait swings from now."""
+        swing = self.plan.gait_swing
+        if self.recovery.busy(t, swing):
+            return
+        lead = SQUARE_UP_LEAD * swing
+        ahead = t + np.linspace(0.0, lead + 2.0 * swing, 8)
+        if not bool(np.all(self.plan.contact_flags(ahead))):
+            return
+        if bool(np.any(self.plan.hand_contact_flags(ahead))):
+            return
+        xi = capture_point(p_c, v_c, self._capture_gain)
+        toe, heel = self.desc.foot_toe, self.desc.foot_heel
+        if distance_outside(xi, support_hull(p_feet, yaw_feet, toe, heel)) > 0.0:
+            return
+        p_ref, _, yaw_ref, _, _ = self._com_reference(np.array([t]))
+        yaw = float(yaw_ref[0])
+        nominal = p_ref[0] + self.foot_offset_from_com @ rot_z(yaw).T
+        width = float(abs(self.foot_offsets[0, 1] - self.foot_offsets[1, 1]))
+        step = plan_square_up_step(
+            t, p_feet, nominal, yaw, width, SQUARE_UP_EXCESS * width, lead, swing
+        )
+        if step is None:
+            return
         if self.plan.footprints:
             self._off_footprints(step.target, step.yaw)
         self.recovery.steps.append(step)
@@ -1641,6 +1683,7 @@ class LocoManipulationController:
         mpc_due = t - self._last_mpc_t >= self.s.mpc_period - 1e-9
         if mpc_due and self.s.recovery_steps:
             self._recover(t, p_c, v_c, p_feet, yaw_feet, float(ref.yaw))
+            self._square_up(t, p_c, v_c, p_feet, yaw_feet)
         stance = (
             bool(plan.foot_stance(0, t)) and self.recovery.swinging(0, t) is None,
             bool(plan.foot_stance(1, t)) and self.recovery.swinging(1, t) is None,

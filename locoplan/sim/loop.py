@@ -256,6 +256,22 @@ class ClosedLoop:
             self.log.event(ev.t, ev.kind, task_index=ev.task_index, detail=ev.detail)
             self._next_event += 1
 
+    def _log_added_steps(self, t: float, start: int) -> None:
+        """The steps the controller added to the plan's schedule since the `start`-th (a
+        recovery step for a capture point outside the soles, or a square-up step), as
+        `step_added` events: foot, reason, lift-off and touchdown times, target."""
+        assert self.log is not None
+        for st in self.controller.recovery.steps[start:]:
+            self.log.event(
+                t,
+                "step_added",
+                detail="LR"[st.foot],
+                reason=st.reason,
+                liftoff=st.liftoff,
+                touchdown=st.touchdown,
+                target=[float(x) for x in st.target[:2]],
+            )
+
     def _record(self, t_tick: float, t: float, out: ControlOutput, applied: FloatArray) -> None:
         """One recorded sample at `t` (s, after the physics step of the tick that started at
         `t_tick`): the record's trunk and object poses, and with a log the link poses, joint
@@ -348,6 +364,7 @@ class ClosedLoop:
         try:
             out = None
             n_clipped = 0  # clipped joints of the held torques, counted per physics step
+            n_added = len(controller.recovery.steps)  # steps the controller added, logged
             applied = np.zeros(len(limits))
             for i in range(n_steps):
                 t = d.time
@@ -360,6 +377,9 @@ class ClosedLoop:
                         raise Interrupted(interrupt.signum)
                     q, v = be.robot_qv()
                     out = controller.step(t, q, v, grasp.hand_load(d) if grasp.holds else None)
+                    if log is not None and len(controller.recovery.steps) > n_added:
+                        self._log_added_steps(t, n_added)
+                    n_added = len(controller.recovery.steps)
                     t_dynamics += out.dynamics_time_s
                     t_mpc += out.mpc_time_s
                     t_wbc += out.wbc_time_s

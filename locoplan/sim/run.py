@@ -69,7 +69,8 @@ class RunOptions:
     qp_backend: str = "daqp"
     f_min: float | None = None
     pushes: tuple[Push, ...] = ()
-    # The controller's recovery steps (`locoplan.control.recovery`); off for comparisons.
+    # The steps the controller adds (recovery and square-up, `locoplan.control.recovery`);
+    # off for comparisons.
     recovery_steps: bool = True
     # The trunk's lean for a held load (`locoplan.control.lean`; off by default: measured
     # neutral, README, Envelope).
