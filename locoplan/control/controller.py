@@ -540,7 +540,7 @@ class LocoManipulationController:
         # Planned touchdown points by (foot, touchdown time), refreshed at every MPC update
         # (10 ms) and shared by the MPC's horizon and the swing trajectories.
         self._footholds: dict[tuple[int, float], tuple[FloatArray, float]] = {}
-        # Steps added to the plan's schedule (`_recover`).
+        # Steps added to the plan's schedule (`_add_steps`).
         self.recovery = RecoverySchedule()
         self._shift_now = np.zeros(2)
         # The trunk's lean back for a held load now (rad; `TrunkLean`), updated with the MPC.
@@ -746,7 +746,7 @@ class LocoManipulationController:
         o = min(max(abs(d) - self._hip_yaw_room, 0.0), 0.5 * abs(d))
         return yaw_td + math.copysign(o, d)
 
-    def _recover(
+    def _add_steps(
         self,
         t: float,
         p_c: FloatArray,
@@ -755,33 +755,22 @@ class LocoManipulationController:
         yaw_feet: FloatArray,
         yaw_ref: float,
     ) -> None:
-        """Add a recovery step (`locoplan.control.recovery`) for the CoM p_c (3,) moving at
-        v_c (3,) when the robot stands, the plan has both feet down and the hands touching
-        nothing (`hand_contact_flags`) for the step and a swing's settling after it, no
-        recovery step is under way or settling, and the capture point lies more than
-        RECOVERY_MARGIN outside the soles."""
+        """Add a step to the plan's schedule (`locoplan.control.recovery`) for the CoM p_c (3,)
+        moving at v_c (3,), when no added step is under way or settling: a recovery step when
+        the capture point lies more than RECOVERY_MARGIN outside the soles, a square-up step
+        (`_square_up`) when it lies inside them; each only while the plan has both feet down
+        and the hands touching nothing (`_free_to_step`) for the step and a swing's settling
+        after it."""
         swing = self.plan.gait_swing
-        if self.recovery.busy(t, swing):
-            return
-        ahead = t + np.linspace(0.0, RECOVERY_LEAD + 2.0 * swing, 8)
-        if not bool(np.all(self.plan.contact_flags(ahead))):
-            return
-        if bool(np.any(self.plan.hand_contact_flags(ahead))):
-            # Not while the hands hold or grip something. The capture point is a point mass's;
-            # a held load is a second mass the arms and the CoM shift move about (or its
-            # support still carries), which it does not describe: lifting 10-13 kg blocks,
-            # HECTOR's capture point (of robot and load together, or of the robot alone)
-            # left its soles by 2-6 cm while it stood through the lift, and the steps taken
-            # then set off a cascade of steps and a fall (seed 44021, standing-hold-006,
-            # -013). Nor when they will before the step is done: the trunk leaning back
-            # before a 12.6 kg lift took the capture point past the heels just before the
-            # grasp (the step lifted off 0.05 s after it), and the left foot rose as the block
-            # came off its table; the stance hip pitch saturated and the robot fell (seed 76021,
-            # standing-hold-014, both strategies). Without the step it holds the block.
+        if self.recovery.busy(t, swing) or not self._free_to_step(t, RECOVERY_LEAD):
             return
         xi = capture_point(p_c, v_c, self._capture_gain)
         toe, heel = self.desc.foot_toe, self.desc.foot_heel
-        if distance_outside(xi, support_hull(p_feet, yaw_feet, toe, heel)) <= RECOVERY_MARGIN:
+        outside = distance_outside(xi, support_hull(p_feet, yaw_feet, toe, heel))
+        if outside == 0.0:
+            self._square_up(t, p_feet)
+            return
+        if outside <= RECOVERY_MARGIN:
             return
         width = float(abs(self.foot_offsets[0, 1] - self.foot_offsets[1, 1]))
         step = plan_recovery_step(
@@ -802,26 +791,36 @@ class LocoManipulationController:
             self._off_footprints(step.target, step.yaw)
         self.recovery.steps.append(step)
 
-    def _square_up(
-        self, t: float, p_c: FloatArray, v_c: FloatArray, p_feet: FloatArray, yaw_feet: FloatArray
-    ) -> None:
-        """Add a square-up step (`locoplan.control.recovery.plan_square_up_step`) when the
-        robot stands at rest (its capture point inside the soles) under the conditions of
-        `_recover`, one of its feet far from its nominal place about the plan's CoM reference
-        (where `_foothold_from` puts a foot of a CoM at rest on its reference), lifting
-        SQUARE_UP_LEAD gait swings from now."""
-        swing = self.plan.gait_swing
-        if self.recovery.busy(t, swing):
-            return
-        lead = SQUARE_UP_LEAD * swing
-        ahead = t + np.linspace(0.0, lead + 2.0 * swing, 8)
+    def _free_to_step(self, t: float, lead: float) -> bool:
+        """Whether the plan keeps both feet down and the hands touching nothing
+        (`hand_contact_flags`) from t over a step lifting `lead` (s) later and a swing's
+        settling after it (8 samples).
+
+        The hands: not while they hold or grip something. The capture point is a point
+        mass's; a held load is a second mass the arms and the CoM shift move about (or its
+        support still carries), which it does not describe: lifting 10-13 kg blocks, HECTOR's
+        capture point (of robot and load together, or of the robot alone) left its soles by
+        2-6 cm while it stood through the lift, and the steps taken then set off a cascade of
+        steps and a fall (seed 44021, standing-hold-006, -013). Nor when they will before the
+        step is done: the trunk leaning back before a 12.6 kg lift took the capture point past
+        the heels just before the grasp (the step lifted off 0.05 s after it), and the left
+        foot rose as the block came off its table; the stance hip pitch saturated and the
+        robot fell (seed 76021, standing-hold-014, both strategies). Without the step it
+        holds the block."""
+        ahead = t + np.linspace(0.0, lead + 2.0 * self.plan.gait_swing, 8)
         if not bool(np.all(self.plan.contact_flags(ahead))):
-            return
-        if bool(np.any(self.plan.hand_contact_flags(ahead))):
-            return
-        xi = capture_point(p_c, v_c, self._capture_gain)
-        toe, heel = self.desc.foot_toe, self.desc.foot_heel
-        if distance_outside(xi, support_hull(p_feet, yaw_feet, toe, heel)) > 0.0:
+            return False
+        return not bool(np.any(self.plan.hand_contact_flags(ahead)))
+
+    def _square_up(self, t: float, p_feet: FloatArray) -> None:
+        """Add a square-up step (`locoplan.control.recovery.plan_square_up_step`) for feet at
+        p_feet (2, 3) standing at rest, lifting SQUARE_UP_LEAD gait swings from t (when
+        `_free_to_step` over it), if one of them stands far from its nominal place about the
+        plan's CoM reference (where `_foothold_from` puts the foot of a CoM at rest on its
+        reference)."""
+        swing = self.plan.gait_swing
+        lead = SQUARE_UP_LEAD * swing
+        if not self._free_to_step(t, lead):
             return
         p_ref, _, yaw_ref, _, _ = self._com_reference(np.array([t]))
         yaw = float(yaw_ref[0])
@@ -1682,8 +1681,7 @@ class LocoManipulationController:
         self._update_load(t, hand_load)
         mpc_due = t - self._last_mpc_t >= self.s.mpc_period - 1e-9
         if mpc_due and self.s.recovery_steps:
-            self._recover(t, p_c, v_c, p_feet, yaw_feet, float(ref.yaw))
-            self._square_up(t, p_c, v_c, p_feet, yaw_feet)
+            self._add_steps(t, p_c, v_c, p_feet, yaw_feet, float(ref.yaw))
         stance = (
             bool(plan.foot_stance(0, t)) and self.recovery.swinging(0, t) is None,
             bool(plan.foot_stance(1, t)) and self.recovery.swinging(1, t) is None,

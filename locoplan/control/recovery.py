@@ -10,7 +10,7 @@ recovery"). When xi leaves it, no force the MPC can plan on the standing feet st
 trunk sinks): HECTOR pushed with 6 N s standing falls forwards, backwards or sideways
 (tests/test_recovery.py), and after releasing a 6 kg box onto its platform it fell backwards
 (fresh envelope seed 44021, walk-carry-011, both strategies). A person steps. The
-controller steps only with its hands free (`LocoManipulationController._recover` says why).
+controller steps only with its hands free (`LocoManipulationController._free_to_step` says why).
 This module decides that step: which foot, when and where; the controller overlays it on the
 plan's schedule for its MPC, its WBC and its swing-foot tracking, and the plan stays as
 written.
