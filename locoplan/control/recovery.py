@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -42,6 +43,7 @@ import numpy.typing as npt
 from locoplan.control.support import clamp_into_support, convex_hull, foot_segments
 
 FloatArray = npt.NDArray[np.float64]
+StepReason = Literal["capture", "square-up"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,7 +57,7 @@ class RecoveryStep:
     touchdown: float
     target: FloatArray
     yaw: float
-    reason: str = "capture"
+    reason: StepReason = "capture"
 
 
 def capture_point(p_com: FloatArray, v_com: FloatArray, time_constant: float) -> FloatArray:
