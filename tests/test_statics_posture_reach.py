@@ -67,3 +67,36 @@ def test_reachable_points_are_reached(h1: StancePostures) -> None:
         target = _shoulder(h1, hand) + np.array([0.3, 0.0, -0.2])
         _, residual, margin = h1.arms(HeldPose(0.98, (hand,), (tuple(target),)))
         assert residual[0] < REACH_TOL and margin > 0.0
+
+
+@pytest.mark.parametrize("robot", ["hector", "h1"])
+def test_reach_shortfall_is_a_lower_bound_on_the_residual(robot: str) -> None:
+    """`reach_shortfall` (which lets the refusal's search for a later pick skip the inverse
+    kinematics, `payload.GRASP_REACH_BOUND_SLACK`) rests on `max_reach` being the arm's
+    longest reach: no posture of 4000 drawn uniformly in the joints' working range reaches
+    further than it plus a tenth of the slack; and for 40 hand points drawn 0-0.5 m beyond
+    reach the residual `arms` reports is at least the bound less the slack."""
+    from locoplan.plan.payload import GRASP_REACH_BOUND_SLACK
+
+    p = StancePostures(load_robot_description(robot))
+    rng = np.random.default_rng(11)
+    q = p.q_nominal.copy()
+    q[:3] = 0.0
+    for hand in (0, 1):
+        joints = p._arms[hand]
+        shoulder = _shoulder(p, hand)
+        longest = 0.0
+        for _ in range(4000):
+            q[7 + joints] = rng.uniform(p.q_lower[joints], p.q_upper[joints])
+            pin.framesForwardKinematics(p.model, p.data, q)
+            hand_point = p.data.oMf[p._hand_ids[hand]].translation
+            longest = max(longest, float(np.linalg.norm(hand_point - shoulder)))
+        assert longest <= p.max_reach[hand] + 0.1 * GRASP_REACH_BOUND_SLACK
+        for _ in range(20):
+            direction = rng.normal(size=3)
+            direction[0] = abs(direction[0])  # ahead of the shoulder, as grips are
+            direction /= np.linalg.norm(direction)
+            target = shoulder + (p.max_reach[hand] + rng.uniform(0.0, 0.5)) * direction
+            pose = HeldPose(0.9, (hand,), (tuple(target),))
+            _, residual, _ = p.arms(pose)
+            assert residual[0] >= p.reach_shortfall(pose) - GRASP_REACH_BOUND_SLACK

@@ -14,8 +14,10 @@ planned yaw only within a few degrees during a turn, also with the yaw off by
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -167,6 +169,57 @@ def track_clearance(
     limits = np.array(
         threshold if isinstance(threshold, tuple) else (threshold,) * len(obstacles), dtype=float
     )
+    smp = _trunk_samples(trunk, t0, t1, yaw_offsets, dt)
+    ts, m, t_all = smp.ts, smp.m, smp.t_turned
+    p_all = track_positions(track, smp.t_poses, smp.x, smp.y, smp.z, smp.c, smp.s)
+    size = ts.size
+    drift = np.sqrt(np.sum((p_all[:size] - p_all[size : 2 * size]) ** 2, axis=1))
+    gaps = np.empty((size, m, len(obstacles)))
+    turned_all = p_all[2 * size :]
+    for o, ob in enumerate(obstacles):
+        d = ob.distances(turned_all, t_all).reshape(m, size).T
+        gaps[:, :, o] = d - hand_radius - drift[:, None]
+    flat = gaps.reshape(ts.size, -1)
+    sample_min = flat.min(axis=1)
+    nearest = gaps.min(axis=(0, 1))
+    below: npt.NDArray[np.bool_] = np.asarray((gaps < limits).any(axis=(1, 2)))
+    minimum = float(sample_min.min())
+    at = int(np.argmax(sample_min == minimum)) if math.isfinite(minimum) else 0
+    what = obstacles[int(flat[at].argmin()) % len(obstacles)].name if math.isfinite(minimum) else ""
+    when = float(ts[at]) if math.isfinite(minimum) else t0
+    hit = ts[below]
+    first: float | None = float(hit.min()) if hit.size else None
+    return Clearance(minimum, when, what, first, tuple(nearest.tolist()))
+
+
+class _TrunkSamples(NamedTuple):
+    """See `_trunk_samples`."""
+
+    ts: FloatArray
+    m: int
+    t_turned: FloatArray
+    t_poses: FloatArray
+    x: FloatArray
+    y: FloatArray
+    z: FloatArray
+    c: FloatArray
+    s: FloatArray
+
+
+@functools.lru_cache(maxsize=64)
+def _trunk_samples(
+    trunk: TrunkPath,
+    t0: float,
+    t1: float,
+    yaw_offsets: tuple[float, ...] | None,
+    dt: float,
+) -> _TrunkSamples:
+    """`track_clearance`'s sample times ts (latest first), the number m of yaw offsets, the
+    times of the turned poses (m ts.size,), and the times and trunk poses the track is
+    evaluated at (t, x, y, z, cos yaw, sin yaw; (2 + m) ts.size each: planned, shifted by
+    TRUNK_POSITION_ERROR, then each yaw offset). They depend on the trunk path and the window
+    only, and a hand-path search checks hundreds of candidate tracks over one window
+    (`hand_paths.approach_segments`): cached (TrunkPath hashes by identity), read-only."""
     n = min(max(1, math.ceil((t1 - t0) / dt - 1e-9)), k.MAX_CLEARANCE_SAMPLES)
     dt = max(dt, (t1 - t0) / n)
     # The samples latest first (the order they were once checked in one by one): of equally near
@@ -187,28 +240,19 @@ def track_clearance(
     yaws = np.concatenate((yaw, yaw, *(yaw + offsets[:, j] for j in range(m))))
     xs = np.concatenate((x, x + k.TRUNK_POSITION_ERROR, *(x for _ in range(m))))
     reps = 2 + m
-    p_all = track_positions(
-        track, np.tile(ts, reps), xs, np.tile(y, reps), np.tile(z, reps), np.cos(yaws), np.sin(yaws)
+    out = (
+        ts,
+        np.tile(ts, m),
+        np.tile(ts, reps),
+        xs,
+        np.tile(y, reps),
+        np.tile(z, reps),
+        np.cos(yaws),
+        np.sin(yaws),
     )
-    size = ts.size
-    drift = np.sqrt(np.sum((p_all[:size] - p_all[size : 2 * size]) ** 2, axis=1))
-    gaps = np.empty((size, m, len(obstacles)))
-    turned_all = p_all[2 * size :]
-    t_all = np.tile(ts, m)
-    for o, ob in enumerate(obstacles):
-        d = ob.distances(turned_all, t_all).reshape(m, size).T
-        gaps[:, :, o] = d - hand_radius - drift[:, None]
-    flat = gaps.reshape(ts.size, -1)
-    sample_min = flat.min(axis=1)
-    nearest = gaps.min(axis=(0, 1))
-    below: npt.NDArray[np.bool_] = np.asarray((gaps < limits).any(axis=(1, 2)))
-    minimum = float(sample_min.min())
-    at = int(np.argmax(sample_min == minimum)) if math.isfinite(minimum) else 0
-    what = obstacles[int(flat[at].argmin()) % len(obstacles)].name if math.isfinite(minimum) else ""
-    when = float(ts[at]) if math.isfinite(minimum) else t0
-    hit = ts[below]
-    first: float | None = float(hit.min()) if hit.size else None
-    return Clearance(minimum, when, what, first, tuple(nearest.tolist()))
+    for a in out:
+        a.flags.writeable = False
+    return _TrunkSamples(out[0], m, *out[1:])
 
 
 def trunk_poses(

@@ -126,6 +126,11 @@ class StancePostures:
         self._shoulders = [model.getJointId(desc.joint_names[arm[0]]) for arm in self._arms]
         self.hip_pitch_joints = robot.hip_pitch_joints()
         self.max_reach = (self._longest_reach(0), self._longest_reach(1))
+        q = self.q_nominal.copy()
+        q[:3] = 0.0
+        pin.framesForwardKinematics(model, data, q)
+        # Each arm's first joint with the trunk at the origin (`arms`' frame).
+        self._shoulder_points = [np.array(data.oMi[j].translation) for j in self._shoulders]
         self._legs_cache: dict[tuple[float, float], tuple[FloatArray, float]] = {}
         self._leg_reach: dict[float, float] = {}
 
@@ -212,6 +217,16 @@ class StancePostures:
                 dq *= max_step / biggest
             q[7 + joints] = np.clip(q[7 + joints] + dq, lo, hi)
         return q, residual
+
+    def reach_shortfall(self, pose: HeldPose) -> float:
+        """How far (m) the farthest of the pose's hand points lies beyond its arm's longest
+        reach from the arm's first joint (negative: within it): a lower bound on the residual
+        `arms` reports, without the inverse kinematics (triangle inequality; exact up to how
+        far `max_reach`'s sweep falls short of the true longest reach)."""
+        return max(
+            float(np.linalg.norm(np.asarray(p) - self._shoulder_points[h])) - self.max_reach[h]
+            for h, p in zip(pose.hands, pose.p_hands_trunk, strict=True)
+        )
 
     def arms(self, pose: HeldPose) -> tuple[FloatArray, tuple[float, ...], float]:
         """Arm joint angles (in q (nq,), trunk at the origin) for the pose's hand points, each
