@@ -12,6 +12,7 @@ from locoplan.control.support import (
     clamp_into_support,
     convex_hull,
     foot_segments,
+    share_between_feet,
 )
 
 TOE, HEEL = 0.09, 0.06
@@ -92,3 +93,38 @@ def test_chord_offsets_of_staggered_feet_see_the_back_edge_between_the_heels() -
     hull = convex_hull(foot_segments(feet, np.zeros(2), TOE, HEEL))
     got = chord_offsets(np.zeros(2), np.array([[1.0, 0.0]]), hull)
     assert got[0] == pytest.approx(-(0.02 + (TOE - HEEL) / 2), abs=1e-12)
+
+
+def test_a_point_between_the_middle_shares_of_the_feet_is_kept() -> None:
+    c0, c1 = np.array([0.0, 0.08]), np.array([0.0, -0.08])
+    for p in ([0.0, 0.0], [0.05, 0.04], [-0.03, -0.04]):
+        np.testing.assert_allclose(share_between_feet(np.array(p), c0, c1, 0.25), p, atol=1e-12)
+
+
+def test_a_point_near_one_foot_moves_along_the_feet_axis_to_the_share() -> None:
+    """Over the left foot (y 0.08) or beyond it, with 0.25: to a quarter of the 0.16 m from
+    it (y 0.04), its offset along the feet (x) kept; the same beyond the right foot."""
+    c0, c1 = np.array([0.0, 0.08]), np.array([0.0, -0.08])
+    np.testing.assert_allclose(
+        share_between_feet(np.array([0.03, 0.12]), c0, c1, 0.25), [0.03, 0.04], atol=1e-12
+    )
+    np.testing.assert_allclose(
+        share_between_feet(np.array([-0.02, -0.07]), c0, c1, 0.25), [-0.02, -0.04], atol=1e-12
+    )
+
+
+def test_staggered_turned_feet_give_the_lever_rule_share() -> None:
+    """Feet 0.2 m apart along a 30 deg axis: a point at 10 % from c0 goes to 25 %."""
+    axis = np.array([math.cos(math.pi / 6), math.sin(math.pi / 6)])
+    normal = np.array([-axis[1], axis[0]])
+    c0 = np.array([0.1, -0.2])
+    c1 = c0 + 0.2 * axis
+    p = c0 + 0.02 * axis + 0.03 * normal
+    np.testing.assert_allclose(
+        share_between_feet(p, c0, c1, 0.25), c0 + 0.05 * axis + 0.03 * normal, atol=1e-12
+    )
+
+
+def test_feet_on_one_spot_leave_the_point() -> None:
+    c = np.array([0.1, 0.1])
+    np.testing.assert_allclose(share_between_feet(np.array([0.3, 0.0]), c, c, 0.25), [0.3, 0.0])

@@ -48,6 +48,7 @@ from locoplan.control.support import (
     clamp_into_support,
     convex_hull,
     foot_segments,
+    share_between_feet,
 )
 from locoplan.control.swing import min_jerk, smoothstep, smoothstep_array, swing_point
 from locoplan.control.tasks import TaskGains, rot_z, rotation_error
@@ -96,6 +97,21 @@ APPROACH_LABELS = frozenset(("tuck", "lift", "reach", "slide"))
 # Checked on the locomotion scripts of seeds 4711, 16180 and 27182 (120: one more succeeds,
 # none lost) and the 276 manipulation scripts of seeds 4711 and 5000 (the same runs succeed).
 STAND_SUPPORT_MARGIN = 0.02
+# Least share of the weight a standing CoM reference leaves on each foot: after the clamp
+# above, the reference is also moved along the line between the feet's centres to at least
+# this fraction of their distance from each (`support.share_between_feet`; by the lever rule
+# each foot then carries about that share at rest). Why: the clamp alone puts a reference
+# that lies off the feet 2 cm inside the edge nearest to it, over one foot, and a line foot
+# at the MPC's f_min or less holds no friction. HECTOR envelope seed 79021, dynamic
+# transfer-054: the loaded turns (5.75 kg) left the robot 17 cm off its plan; standing to
+# release the parcel, the reference came beside the left foot, the right carried 0-15 N,
+# lifted and slid 13 cm inwards, and the robot fell at 6.51 s. With a quarter it carries
+# 42-54 N and stays put (tests/test_stand_share.py). A quarter leaves the middle half of the
+# distance between the feet free (every standing reference of a plan lies near its middle),
+# and is 4x HECTOR's f_min at its weight (42 N of 166 N); chosen once, not tuned. Paired on
+# the same scripts: HECTOR seed 79021 (both strategies) 397 -> 398 of 400 (transfer-054 fixed,
+# none lost), H1 seed 72027 200 of 200 both.
+STAND_FOOT_SHARE = 0.25
 # Fastest change of the trunk's lean for a held load (rad/s; `_lean_limited`): the full
 # 25 deg in 1.5 s. On envelope seed 44021's 33 heaviest or failing manipulation runs, 26
 # succeed with it against 25 following the load's ramp (walk-carry-024 falls there) and 21
@@ -1010,6 +1026,10 @@ class LocoManipulationController:
                 foot_segments(p_feet_now, yaw_feet_now, self.desc.foot_toe, self.desc.foot_heel)
             )
             inside = clamp_into_support(p_all[0, :2], hull, STAND_SUPPORT_MARGIN)
+            mid = (self.desc.foot_toe - self.desc.foot_heel) / 2.0
+            heading = np.stack((np.cos(yaw_feet_now), np.sin(yaw_feet_now)), axis=1)
+            c0, c1 = p_feet_now[:2, :2] + mid * heading[:2]
+            inside = share_between_feet(inside, c0, c1, STAND_FOOT_SHARE)
             self._stand_offset = inside - p_all[0, :2]
         shift = (
             self._com_shift(

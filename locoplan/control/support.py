@@ -90,6 +90,20 @@ def clamp_into_support(p: FloatArray, hull: FloatArray, margin: float) -> FloatA
     return best if best is not None else np.asarray(hull, dtype=float).mean(axis=0)
 
 
+def share_between_feet(p: FloatArray, c0: FloatArray, c1: FloatArray, share: float) -> FloatArray:
+    """p (2,) moved along the line from the foot centre c0 (2,) to c1 (2,) so that its
+    projection lies at least `share` of their distance from each (lever rule: each of two
+    feet then carries at least about `share` of a static weight at p); p itself when it does."""
+    d = np.asarray(c1, dtype=float) - np.asarray(c0, dtype=float)
+    gap = float(np.hypot(d[0], d[1]))
+    if gap < 1e-9:
+        return np.asarray(p, dtype=float)
+    u = d / gap
+    lam = float((np.asarray(p) - c0).dot(u)) / gap
+    moved = min(max(lam, share), 1.0 - share)
+    return np.asarray(p, dtype=float) + (moved - lam) * gap * u
+
+
 def chord_offsets(p: FloatArray, directions: FloatArray, hull: FloatArray) -> FloatArray:
     """How far (n,) m the point p (2,) stands ahead of the middle of the convex polygon
     `hull` (m, 2, CCW) along each unit direction of `directions` (n, 2): the middle of the
