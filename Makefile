@@ -41,7 +41,12 @@ types: install
 
 # Every core (pytest-xdist, a test file per worker); the live-view tests pace their runs against
 # the wall clock, so they run alone afterwards (under the parallel load a session missed its /tf).
+# First numba's kernels, compiled once into their cache (about 45 s in a fresh clone, nothing
+# when cached): otherwise every test process and every subprocess that starts before the cache
+# is written compiles them itself (~40 s of CPU each). warm_up's 22 only sizes the arrays;
+# the kernels are compiled for their types.
 pytest: install
+	$(BIN)/python -c "import locoplan.sim.run; from locoplan.control import mpc_kernels, wbc_kernels; mpc_kernels.warm_up(); wbc_kernels.warm_up(22)"
 	$(BIN)/pytest -q -n auto --dist loadfile --ignore=tests/test_live.py
 	$(BIN)/pytest -q tests/test_live.py
 
