@@ -77,7 +77,7 @@ GRASP_REACH_STEP = 0.02
 # How much (m) the search trusts `StancePostures.reach_shortfall` (a lower bound on the arms'
 # residual) to skip a step's inverse kinematics: a step is skipped only when the bound exceeds
 # the allowed residual by this. The bound is exact but for how far the arms' longest-reach
-# sweep falls short of the true longest reach; tests/test_plan_payload.py checks the bound
+# sweep falls short of the true longest reach; tests/test_statics_posture_reach.py checks it
 # against the inverse kinematics on random hand points of both robots. The skip took
 # `locoplan validate` of a pick 0.5 m out of reach from 8.8 s (171 steps of inverse
 # kinematics) to well under a second.
