@@ -249,11 +249,9 @@ class StancePostures:
             q_small, r_small = self._dls(start, goals, joints, IK_SMALL_STEP, IK_SMALL_ITERATIONS)
             if r_small.max() < residual.max():
                 q, residual = q_small, r_small
-        pin.framesForwardKinematics(self.model, self.data, q)
         margins = []
         for h, p, r in zip(pose.hands, pose.p_hands_trunk, residual, strict=True):
-            shoulder = self.data.oMi[self._shoulders[h]].translation
-            distance = float(np.linalg.norm(np.asarray(p) - shoulder))
+            distance = float(np.linalg.norm(np.asarray(p) - self._shoulder_points[h]))
             margins.append(-float(r) if r > REACH_TOL else self.max_reach[h] - distance)
         return q, tuple(float(r) for r in residual), min(margins)
 
