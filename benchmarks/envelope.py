@@ -21,8 +21,9 @@ under DIR/runs/). It prints, per family and strategy:
   `infeasible (<reason>): ...`, else `invalid` (or `plan`);
 - failed: ran and broke an expectation or the run itself, by cause: `fell`, `not placed`
   (an expected `placed` did not hold), `torque` (peak torque ratio above the limit),
-  `missed grasp` (the hands never reached the object), `error` (solver failure, simulator
-  instability, crashed or timed-out worker, internal error), `other`;
+  `missed grasp` (the hands never reached the object), `not lifted` (gripped but never off
+  its support: a standing hold put "back" would otherwise pass), `error` (solver failure,
+  simulator instability, crashed or timed-out worker, internal error), `other`;
 
 then the totals, the wall time, the median real-time factor of the runs, and every refused
 or failed script with its one-line cause and the command that reruns it. `--json` writes the
@@ -125,7 +126,7 @@ def refusal_reason(text: str) -> str:
 
 def failure_cause(outcome: Outcome) -> str:
     """One cause for a failed or broken run, most telling first: fell, not placed, torque,
-    missed grasp, error, other."""
+    missed grasp, not lifted, error, other."""
     if outcome.status == "error" or outcome.metrics is None:
         return "error"
     metrics = outcome.metrics
@@ -137,8 +138,9 @@ def failure_cause(outcome: Outcome) -> str:
         return "not placed"
     if "max_torque_ratio" in failed or (metrics.get("peak_torque_ratio") or 0.0) > 1.0:
         return "torque"
-    if any(key.startswith("pick.") for key in failed):
-        return "missed grasp"
+    picks = [str(results[key].get("value", "")) for key in failed if key.startswith("pick.")]
+    if picks:
+        return "missed grasp" if any("hands" in v for v in picks) else "not lifted"
     return "other"
 
 

@@ -49,11 +49,14 @@ def test_generated_script_succeeds(tmp_path: Path, suite: dict[str, str], name: 
 
 
 DATA = Path(__file__).parent / "data" / "envelope"
-# Issue 12's four example scripts; all four succeed (walk-carry-6kg since its box is carried
-# close to the trunk through the loaded turn and walk: it fell 1.0 s into its walk before).
+# Issue 12's example scripts that succeed (walk-carry-6kg since its box is carried close to
+# the trunk through the loaded turn and walk: it fell 1.0 s into its walk before). The fourth,
+# hold-11kg, is refused for its lift (tests/test_plan_payload.py): it stood and its block was
+# "placed" on its table in earlier revisions, but the block never left the table.
+EXAMPLES = [p.stem for p in sorted(DATA.glob("*.yaml")) if p.stem != "hold-11kg"]
 
 
-@pytest.mark.parametrize("name", [p.stem for p in sorted(DATA.glob("*.yaml"))])
+@pytest.mark.parametrize("name", EXAMPLES)
 def test_issue_example_succeeds(tmp_path: Path, name: str) -> None:
     loaded = load_scenario_file(DATA / f"{name}.yaml")
     result = run_scenario(loaded.scenario, loaded.text, RunOptions(out_dir=tmp_path))

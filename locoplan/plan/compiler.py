@@ -16,6 +16,7 @@ from locoplan.plan.payload import (
     behind_grips,
     centre_grips,
     check_grasp_reach,
+    check_lift,
     check_payload,
     check_place_reach,
     planned_grasp,
@@ -121,7 +122,9 @@ def compile_plan(
         plan = _face_the_drop(scenario, plan, plan.notes[len(base_notes) :], exc, build, geometry)
     plan = _hover_within_reach(plan, scenario, build, base_notes)
     check_payload(plan, scenario.robot)
-    return with_pre_leans(plan, scenario.robot)
+    plan = with_pre_leans(plan, scenario.robot)
+    check_lift(plan, scenario.robot)
+    return plan
 
 
 def _hover_within_reach(

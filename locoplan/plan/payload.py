@@ -72,6 +72,19 @@ PoseKind = Literal["grasp", "carry", "place"]
 # line feet) for every envelope load, and 5 mm is a quarter of the hands' tracking error.
 PRE_LEAN_MAX = 0.10
 PRE_LEAN_TOL = 0.005
+# How far (m) past the feet's toes the combined centre of mass of robot and load may stand
+# at a lift-off, by the static model, with the trunk leaned back as far as the arms still reach
+# the grip (`check_lift`). Why not 0: the model leans by the pelvis alone, to where the arms
+# reach with no error, and the hands work to within the grasp tolerance of their points; the
+# paper's 14 kg hold (scenarios/standing-load.yaml, hands 0.30 m out), the one reference lift,
+# lifts and holds its block at 1.07 cm past by the model. Checked on the 78 picks of 3.6-13.6
+# kg of HECTOR envelope seeds 79021 and 81021 with a margin under 6 cm, each run closed loop
+# and its object's height read back: of the 20 more than 1.2 cm past (1.22-7.0 cm), 18 were
+# not held off their table or fell (a 7.3 kg block 3.2 cm past and a 10.5 kg one 2.3 cm past
+# were held); of the 13 up to 1.2 cm past (0-1.0 cm), 11 were held (not: two 13-13.6 kg blocks
+# 0.29 m out, picked in 0.86-1.07 s). H1's envelope seed 74027: every lift inside its toes
+# (1.8 cm and more).
+LIFT_TOE_TOL = 0.012
 # Time step (s) of the search for a later lift-off that reaches a grasp (refusal advice).
 GRASP_REACH_STEP = 0.02
 # How much (m) the search trusts `StancePostures.reach_shortfall` (a lower bound on the arms'
@@ -471,6 +484,91 @@ def pre_lean_room(model: StaticModel, pose: HeldPose) -> float:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if reaches(mid) else (lo, mid)
     return lo
+
+
+def lift_margin(model: StaticModel, pose: HeldPose, mass: float, lean: float) -> LiftMargin:
+    """The lift-off of `mass` kg gripped in the grasp `pose` with the trunk leaned back `lean`
+    m (the pelvis shifted back that far, the hands still at the grip: moved as
+    `pre_lean_room` moves them): the combined centre of mass's margin inside the toes."""
+    mx = sum(p[0] for p in pose.p_hands_trunk) / len(pose.p_hands_trunk)
+    my = sum(p[1] for p in pose.p_hands_trunk) / len(pose.p_hands_trunk)
+    norm = math.hypot(mx, my)
+    ux, uy = (mx / norm, my / norm) if norm > 1e-9 else (1.0, 0.0)
+    moved = replace(
+        pose,
+        p_hands_trunk=tuple((p[0] + lean * ux, p[1] + lean * uy, p[2]) for p in pose.p_hands_trunk),
+    )
+    arms_q, _, _ = model.postures.arms(moved)
+    terms = model.postures.terms(arms_q, moved, lean)
+    toe = model.support_x[1]
+    robot_x, load_x = float(terms.com[0]), float(terms.p_load[0])
+    combined = (model.mass * robot_x + mass * load_x) / (model.mass + mass)
+    return LiftMargin(toe - combined, robot_x, load_x, toe, model.mass)
+
+
+@dataclass(frozen=True, slots=True)
+class LiftMargin:
+    """A lift-off's balance by the static model (`lift_margin`): `margin` (m) of the combined
+    centre of mass inside the toes (negative: past them), the robot's own CoM `robot_x` and
+    the load's point `load_x` (m, along the feet from the sole sites), the toes' `toe` (m) and
+    the robot's mass (kg)."""
+
+    margin: float
+    robot_x: float
+    load_x: float
+    toe: float
+    robot_mass: float
+
+    def mass_limit(self, tol: float) -> float:
+        """The largest load (kg) whose combined CoM stands at most `tol` m past the toes."""
+        over = self.load_x - self.toe - tol
+        if over <= 0.0:
+            return math.inf
+        return max(0.0, self.robot_mass * (self.toe + tol - self.robot_x) / over)
+
+    def nearer(self, mass: float, tol: float) -> float:
+        """How much nearer (m) a load of `mass` kg would have to be for its combined CoM to
+        stand at most `tol` m past the toes (the arms' room held as it is)."""
+        goal = ((self.robot_mass + mass) * (self.toe + tol) - self.robot_mass * self.robot_x) / mass
+        return max(0.0, self.load_x - goal)
+
+
+def check_lift(plan: Plan, robot: str) -> None:
+    """Raise an `infeasible (lift)` PlanError, located at the pick, for the first hold of
+    `plan` whose lift-off the robot `robot` cannot balance: with the trunk leaned back as far
+    as the arms still reach the grip (`ObjectHold.pre_lean`, `pre_lean_room`), the combined
+    centre of mass of robot and load stands more than LIFT_TOE_TOL past the toes (`lift_margin`).
+
+    Why: the carry pose's check (`check_payload`) holds the load where the hands carry it, and
+    shifts the pelvis back with the hands; at the lift-off the hands are at the grip on the
+    table, so the pelvis can go back only as far as the arms still reach it. A heavy load far
+    out then cannot leave its table: the robot leans onto its toes, the hands push the box
+    across the top and it stays there, or the robot falls (HECTOR envelope seeds 79021 and
+    81021: standing holds of 8.7-13.5 kg 0.33-0.40 m out never held their block, walk-carries
+    of 7.8-7.9 kg 0.34-0.37 m out fell after the lift; the figures at LIFT_TOE_TOL)."""
+    if not plan.holds:
+        return
+    model = _model(robot)
+    for hold in plan.holds:
+        grasp = _grasp_pose(plan, hold)
+        if grasp is None or hold.mass <= 0.0:
+            continue
+        m = lift_margin(model, grasp.pose, hold.mass, hold.pre_lean)
+        if m.margin >= -LIFT_TOE_TOL:
+            continue
+        ahead = sum(p[0] for p in grasp.pose.p_hands_trunk) / len(grasp.pose.p_hands_trunk)
+        limit = math.floor(m.mass_limit(LIFT_TOE_TOL) * 10.0) / 10.0
+        nearer = math.ceil(m.nearer(hold.mass, LIFT_TOE_TOL) * 100.0) / 100.0
+        raise InfeasiblePlanError(
+            f"infeasible (lift): lifting '{hold.object}' ({hold.mass:g} kg, gripped "
+            f"{ahead:.2f} m ahead of the trunk) puts the centre of mass of robot and load "
+            f"{-m.margin:.3f} m past the toes even with the trunk leaned back "
+            f"{hold.pre_lean:.3f} m, as far as the arms still reach the grip (static analysis; "
+            f"{LIFT_TOE_TOL:g} m allowed); lift at most {limit:.1f} kg this far out, or place "
+            f"it {nearer:.2f} m nearer the robot",
+            hold.pick_task,
+            loc=("tasks", hold.pick_task),
+        )
 
 
 def _model(robot: str) -> StaticModel:
