@@ -113,10 +113,14 @@ class PlannedHold:
 
 @dataclass(frozen=True, slots=True, eq=False)
 class PayloadMargin:
-    """A `PlannedHold` and its static analysis."""
+    """A `PlannedHold` and its static analysis; for a grasp pose also its lift's balance
+    (`lift_margin`: the object's mass, the trunk leaned back `lean` m as the arms allow)."""
 
     hold: PlannedHold
     analysis: StaticAnalysis
+    lift: LiftMargin | None = None
+    lift_mass: float = 0.0
+    lean: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready margins (m, kg; None for an infinite ratio or limit)."""
@@ -135,6 +139,8 @@ class PayloadMargin:
             "reach_margin": a.reach_margin,
             "pelvis_shift": a.shift,
             "payload_limit": _finite(a.payload_limit),
+            "lift_margin": None if self.lift is None else self.lift.margin,
+            "lift_lean": None if self.lift is None else self.lean,
         }
 
 
@@ -581,14 +587,22 @@ def _model(robot: str) -> StaticModel:
 
 
 def payload_margins(plan: Plan, robot: str) -> tuple[PayloadMargin, ...]:
-    """The full static analysis of every carry and place pose of `plan` for the robot
-    `robot` (a name or robot.yaml path): about 70 ms per pose."""
+    """The full static analysis of every grasp, carry and place pose of `plan` for the
+    robot `robot` (a name or robot.yaml path), and each grasp's lift (`lift_margin`): about
+    70 ms per pose."""
     if not plan.holds:
         return ()
     model = _model(robot)
-    return tuple(
-        PayloadMargin(h, model.analyse(h.pose, h.mass)) for h in planned_holds(plan, model)
-    )
+    holds = {(h.object, h.pick_task): h for h in plan.holds}
+    out = []
+    for held in planned_holds(plan, model):
+        margin = PayloadMargin(held, model.analyse(held.pose, held.mass))
+        hold = holds.get((held.object, held.task_index))
+        if held.kind == "grasp" and hold is not None and hold.mass > 0.0:
+            lift = lift_margin(model, held.pose, hold.mass, hold.pre_lean)
+            margin = replace(margin, lift=lift, lift_mass=hold.mass, lean=hold.pre_lean)
+        out.append(margin)
+    return tuple(out)
 
 
 def grasp_reach_limit(geometry: PlanGeometry = HECTOR_GEOMETRY) -> float:

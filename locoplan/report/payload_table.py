@@ -6,11 +6,11 @@ import math
 
 from rich.table import Table
 
-from locoplan.plan.payload import PayloadMargin
+from locoplan.plan.payload import LIFT_TOE_TOL, PayloadMargin
 
 
 def payload_table(margins: tuple[PayloadMargin, ...]) -> Table:
-    """One row per grasp pose (its reach margin only), carry or place pose
+    """One row per grasp pose (its reach margin and its lift's balance), carry or place pose
     (`locoplan.plan.payload.payload_margins`): the mass, reach margin, worst static torque
     ratio and its joint, centre-of-mass margin, the pelvis shift the analysis used and the
     payload limit of the pose. A carry or place pose out of the arms' reach says how far short
@@ -25,9 +25,17 @@ def payload_table(margins: tuple[PayloadMargin, ...]) -> Table:
     for m in margins:
         a = m.analysis
         if m.hold.kind == "grasp":
+            lift = ""
+            if m.lift is not None:
+                where = "inside" if m.lift.margin >= 0.0 else "past"
+                lift = (
+                    f"; lifting {m.lift_mass:g} kg with the trunk leaned back {m.lean:.3f} m: "
+                    f"combined CoM {abs(m.lift.margin):.3f} m {where} the toes "
+                    f"({LIFT_TOE_TOL:g} m past allowed)"
+                )
             table.add_row(
                 f"{m.hold.object} grasp (task {m.hold.task_index})",
-                f"on its support: reach margin {a.reach_margin:+.3f} m",
+                f"on its support: reach margin {a.reach_margin:+.3f} m{lift}",
             )
             continue
         ratio = f"{a.torque_ratio:.2f} ({a.joint})" if a.balanced else "unbalanced"
