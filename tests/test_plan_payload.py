@@ -475,7 +475,7 @@ def test_plan_prints_the_margins_and_writes_them_to_json(tmp_path: Path) -> None
     assert all(r["torque_ratio"] < 1.0 and r["payload_limit"] > 7.0 for r in rows[1:])
     assert rows[0]["mass"] == 0.0 and rows[0]["reach_margin"] > 0.0
     # The grasp's lift: inside the toes, with the lean the arms leave; none for the others.
-    assert -LIFT_TOE_TOL <= rows[0]["lift_margin"] and rows[0]["lift_lean"] >= 0.0
+    assert rows[0]["lift_margin"] >= -LIFT_TOE_TOL and rows[0]["lift_lean"] >= 0.0
     assert all(r["lift_margin"] is None for r in rows[1:])
     assert "lifting 7 kg" in out and "combined CoM" in out and "(0.012 m past allowed)" in out
 

@@ -573,9 +573,7 @@ def _slow_heavy_standing_picks(
         release = by_index.get(hold.release_task) if hold.release_task is not None else None
         if release is not None:
             until = max(until, release.end)
-        if any(
-            t.kind == "locomotion" and t.start < until and t.end > pick.start for t in tasks
-        ):
+        if any(t.kind == "locomotion" and t.start < until and t.end > pick.start for t in tasks):
             continue
         grip = next(
             (
