@@ -6,7 +6,7 @@ import math
 
 from rich.table import Table
 
-from locoplan.plan.payload import LIFT_TOE_TOL, PayloadMargin
+from locoplan.plan.payload import PayloadMargin
 
 
 def payload_table(margins: tuple[PayloadMargin, ...]) -> Table:
@@ -30,8 +30,7 @@ def payload_table(margins: tuple[PayloadMargin, ...]) -> Table:
                 where = "inside" if m.lift.margin >= 0.0 else "past"
                 lift = (
                     f"; lifting {m.lift_mass:g} kg with the trunk leaned back {m.lean:.3f} m: "
-                    f"combined CoM {abs(m.lift.margin):.3f} m {where} the toes "
-                    f"({LIFT_TOE_TOL:g} m past allowed)"
+                    f"combined CoM {abs(m.lift.margin):.3f} m {where} the toes"
                 )
             table.add_row(
                 f"{m.hold.object} grasp (task {m.hold.task_index})",
