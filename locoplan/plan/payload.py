@@ -10,8 +10,11 @@ weight standing still:
   (the object is accelerated there; the static analysis does not apply).
 - grasp: at a pick's lift-off, the hands at the grip points ("grip" segment's end, world, just
   inside the object's sides), seen from the planned trunk pose then; mass 0 (the support
-  still bears the object). Only its reach matters: `check_grasp_reach` refuses a pick whose
-  grip points are more than GRASP_TOLERANCE + GRASP_SQUEEZE (4 cm) beyond what the arms reach
+  still bears the object). Its reach and its lift's balance matter: `check_lift` refuses a
+  pick whose combined centre of mass, with the object's weight at the grip and the trunk
+  leaned back as far as the hands may go, stands past the toes; `check_grasp_reach` refuses
+  a pick whose grip points are more than GRASP_TOLERANCE + GRASP_SQUEEZE (4 cm) beyond what
+  the arms reach
   from that trunk pose: the hands then stay more than GRASP_TOLERANCE from the object's
   sides, where the hands close (constants), at full stretch. On envelope seed 777 (200
   scripts, 160 picks; the rule is not fitted to it) five grip points at lift-off were beyond

@@ -230,7 +230,7 @@ def _object_goal_times(scenario: Scenario, plan: Plan, rec: RunRecord) -> dict[i
     return out
 
 
-def _not_held(scenario: Scenario, plan: Plan, rec: RunRecord) -> dict[str, str]:
+def _not_held(plan: Plan, rec: RunRecord) -> dict[str, str]:
     """The objects that a pick gripped but that were not held off their support from the
     pick's end to the start of their release (drop or throw; the run's end if none), with the
     run going on, standing, through that window: object -> what happened.
@@ -241,7 +241,7 @@ def _not_held(scenario: Scenario, plan: Plan, rec: RunRecord) -> dict[str, str]:
     table (or rises a centimetre or two and goes back down); the hands push it across the
     top while the robot leans, and a standing hold that puts it back "onto" the same table
     met its `placed` expectation without holding it (HECTOR envelope seeds 79021 and 81021:
-    standing holds of 8.7-13.5 kg held 0.37-0.40 m out, counted successes)."""
+    standing holds of 8.7-13.6 kg 0.29-0.40 m out had counted as successes)."""
     t = np.asarray(rec.t)
     out: dict[str, str] = {}
     if not t.size:
@@ -361,7 +361,7 @@ def compute_metrics(
             "value": f"hands {gap:.3f} m from '{name}' at the planned grasp",
             "limit": "within 0.03 m (the object may be out of reach)",
         }
-    for name, what in _not_held(scenario, plan, rec).items():
+    for name, what in _not_held(plan, rec).items():
         results.setdefault(
             f"pick.{name}",
             {
