@@ -14,9 +14,8 @@ weight standing still:
   pick whose combined centre of mass, with the object's weight at the grip and the trunk
   leaned back as far as the hands may go, stands past the toes; `check_grasp_reach` refuses
   a pick whose grip points are more than GRASP_TOLERANCE + GRASP_SQUEEZE (4 cm) beyond what
-  the arms reach
-  from that trunk pose: the hands then stay more than GRASP_TOLERANCE from the object's
-  sides, where the hands close (constants), at full stretch. On envelope seed 777 (200
+  the arms reach from that trunk pose: the hands then stay more than GRASP_TOLERANCE from
+  the object's sides, where the hands close (constants), at full stretch. On envelope seed 777 (200
   scripts, 160 picks; the rule is not fitted to it) five grip points at lift-off were beyond
   reach: by 0.164 and 0.073 m (two transfers whose pick starts early in a long turn: both
   failed, one missing the grasp by 0.114 m; now refused), 0.036 m (a transfer: passed),
