@@ -11,6 +11,7 @@ from locoplan.plan.errors import InfeasiblePlanError, PlanError
 from locoplan.plan.events import PlanEvent, sort_events
 from locoplan.plan.footholds import build_footholds
 from locoplan.plan.gait import FOOT_NAMES, build_contact_schedule
+from locoplan.plan.hands import HandSegment
 from locoplan.plan.manipulation import build_manipulation
 from locoplan.plan.payload import (
     behind_grips,
@@ -491,15 +492,7 @@ def _wait_for_heavy_lifts(
     notes: list[str] = []
     for hold in plan.holds:
         pick = by_index[hold.pick_task]
-        raise_ = next(
-            (
-                g
-                for track in plan.manipulation.tracks
-                for g in track.segments
-                if g.task_index == pick.index and g.label == "raise"
-            ),
-            None,
-        )
+        raise_ = _task_segment(plan, pick.index, "raise")
         if raise_ is None or raise_.start.frame != "world":
             continue
         ahead = world_to_trunk(plan.trunk, raise_.t1, raise_.start.point)[0]
@@ -575,15 +568,7 @@ def _slow_heavy_standing_picks(
             until = max(until, release.end)
         if any(t.kind == "locomotion" and t.start < until and t.end > pick.start for t in tasks):
             continue
-        grip = next(
-            (
-                g
-                for track in plan.manipulation.tracks
-                for g in track.segments
-                if g.task_index == pick.index and g.label == "grip"
-            ),
-            None,
-        )
+        grip = _task_segment(plan, pick.index, "grip")
         if grip is None or grip.end.frame != "world":
             continue
         ahead = world_to_trunk(plan.trunk, grip.t1, grip.end.point)[0]
@@ -606,6 +591,19 @@ def _slow_heavy_standing_picks(
     if not notes:
         return tasks, ()
     return tuple(by_index[t.index] for t in tasks), tuple(notes)
+
+
+def _task_segment(plan: Plan, task: int, label: str) -> HandSegment | None:
+    """The first hand segment of `plan` (left hand's first) of task `task` labelled `label`."""
+    return next(
+        (
+            g
+            for track in plan.manipulation.tracks
+            for g in track.segments
+            if g.task_index == task and g.label == label
+        ),
+        None,
+    )
 
 
 def _leg_torque(robot: str) -> float:

@@ -561,7 +561,7 @@ def check_lift(plan: Plan, robot: str) -> None:
         grasp = _grasp_pose(plan, hold)
         if grasp is None or hold.mass <= 0.0:
             continue
-        m = lift_margin(model, grasp.pose, hold.mass, hold.pre_lean, slack)
+        m = _hold_lift(model, plan, hold, grasp.pose)
         if m.margin >= 0.0:
             continue
         ahead = sum(p[0] for p in grasp.pose.p_hands_trunk) / len(grasp.pose.p_hands_trunk)
@@ -577,6 +577,12 @@ def check_lift(plan: Plan, robot: str) -> None:
             hold.pick_task,
             loc=("tasks", hold.pick_task),
         )
+
+
+def _hold_lift(model: StaticModel, plan: Plan, hold: ObjectHold, grasp: HeldPose) -> LiftMargin:
+    """`hold`'s lift-off from its `grasp` pose, the trunk leaned back as far as the hands may
+    go: the arms' room (`ObjectHold.pre_lean`) and `plan`'s grasp tolerance (`check_lift`)."""
+    return lift_margin(model, grasp, hold.mass, hold.pre_lean, plan.geometry.grasp_tolerance)
 
 
 def _model(robot: str) -> StaticModel:
@@ -602,7 +608,7 @@ def payload_margins(plan: Plan, robot: str) -> tuple[PayloadMargin, ...]:
         hold = holds.get((held.object, held.task_index))
         if held.kind == "grasp" and hold is not None and hold.mass > 0.0:
             lean = hold.pre_lean + plan.geometry.grasp_tolerance
-            lift = lift_margin(model, held.pose, hold.mass, hold.pre_lean, lean - hold.pre_lean)
+            lift = _hold_lift(model, plan, hold, held.pose)
             margin = replace(margin, lift=lift, lift_mass=hold.mass, lean=lean)
         out.append(margin)
     return tuple(out)
