@@ -579,6 +579,33 @@ def check_lift(plan: Plan, robot: str) -> None:
         )
 
 
+def pick_lift_margin(
+    plan: Plan, robot: str, pick_task: int, slack: float | None = None, nearer: float = 0.0
+) -> LiftMargin | None:
+    """The lift-off balance (`lift_margin`) of the hold that task `pick_task` picks, with
+    the trunk leaned back the arms' room and `slack` m more (the plan's grasp tolerance
+    when None, as `check_lift` judges it); with `nearer` (m), had the robot stood that much
+    nearer along the trunk's x at the grasp (the hand points that much nearer, the arms'
+    room at them: what a step before the pick would give, `compiler._step_in_for_the_lift`).
+    None for no such hold, a massless one, or one without a grasp pose."""
+    hold = next((h for h in plan.holds if h.pick_task == pick_task), None)
+    if hold is None or hold.mass <= 0.0:
+        return None
+    grasp = _grasp_pose(plan, hold)
+    if grasp is None:
+        return None
+    if slack is None:
+        slack = plan.geometry.grasp_tolerance
+    model = _model(robot)
+    pose, lean = grasp.pose, hold.pre_lean
+    if nearer:
+        pose = replace(
+            pose, p_hands_trunk=tuple((p[0] - nearer, p[1], p[2]) for p in pose.p_hands_trunk)
+        )
+        lean = pre_lean_room(model, pose)
+    return lift_margin(model, pose, hold.mass, lean, slack)
+
+
 def _hold_lift(model: StaticModel, plan: Plan, hold: ObjectHold, grasp: HeldPose) -> LiftMargin:
     """`hold`'s lift-off from its `grasp` pose, the trunk leaned back as far as the hands may
     go: the arms' room (`ObjectHold.pre_lean`) and `plan`'s grasp tolerance (`check_lift`)."""

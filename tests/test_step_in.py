@@ -1,0 +1,109 @@
+"""The step nearer before a heavy standing pick (`locoplan.plan.compiler._step_in_for_the_lift`).
+
+Issue 12's hold-11kg: 11 kg gripped 0.36 m out leaves the combined centre of mass of robot and
+block 2.8 cm past the toes at the lift-off even leaned back as far as the hands may go
+(`check_lift`). The planner starts the pick with a step towards the table instead of refusing
+it; where no step can mend it (a table whose front leaves no room for the feet, another task
+in the time the step takes) the lift is refused and the message says why.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from plan_fixtures import scenario_from_text
+
+from locoplan.plan import PlanError, compile_plan
+from locoplan.plan.compiler import STEP_IN_CYCLES, STEP_IN_MIN
+from locoplan.plan.payload import check_lift, pick_lift_margin
+from locoplan.plan.robot_geometry import HECTOR_GEOMETRY
+
+HOLD_11KG = Path(__file__).resolve().parent / "data" / "envelope" / "hold-11kg.yaml"
+# The lift's refusal from where the robot stands (measured by `check_lift`, static model).
+LIFT_REFUSAL = (
+    "infeasible (lift): lifting 'block' (11 kg, gripped 0.36 m ahead of the trunk) puts "
+    "the centre of mass of robot and load 0.028 m past the toes even with the trunk "
+    "leaned back 0.064 m, as far as the hands may be from the grip (the arms' reach and "
+    "the 0.03 m grasp tolerance; static analysis); lift at most 8.0 kg this far out, or "
+    "place it 0.08 m nearer the robot; stepping nearer first does not mend it: "
+)
+
+
+def test_a_heavy_far_pick_starts_with_the_shortest_step_that_balances_its_lift() -> None:
+    scenario = scenario_from_text(HOLD_11KG.read_text())
+    plan = compile_plan(scenario)
+    period = scenario.gait.period
+    walk = next(t for t in plan.tasks if t.action == "walk")
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    # The walk is the planner's (an index past the file's tasks), straight ahead, and the
+    # pick follows it for its written duration (2 s), the drop where written.
+    assert walk.index == len(scenario.tasks)
+    assert walk.start == pytest.approx(0.5) and walk.end == pytest.approx(0.5 + 2 * period)
+    assert STEP_IN_CYCLES == 2
+    step = walk.distance[0] if walk.distance else 0.0
+    assert walk.distance == (step, 0.0) and walk.angle == 0.0
+    assert STEP_IN_MIN <= step <= HECTOR_GEOMETRY.walk_stride
+    assert pick.start == pytest.approx(walk.end) and pick.end == pytest.approx(walk.end + 2.0)
+    drop = next(t for t in plan.tasks if t.action == "drop")
+    assert (drop.start, drop.end) == pytest.approx((5.5, 7.0))
+    assert any(
+        n.startswith(f"the pick of 'block' starts with a step {step:.2f} m nearer")
+        for n in plan.notes
+    ), plan.notes
+    # The trunk ends the step that much nearer, and the block is gripped that much nearer.
+    x, _, _, _, _, _ = plan.trunk.pose_at(pick.start)
+    assert x == pytest.approx(step, abs=1e-9)
+    # Balanced with the trunk the grasp tolerance short of its lean; the check accepts it.
+    tol = HECTOR_GEOMETRY.grasp_tolerance
+    margin = pick_lift_margin(plan, scenario.robot, pick.index, slack=-tol)
+    assert margin is not None and margin.margin >= 0.0
+    check_lift(plan, scenario.robot)
+    # ... and it is the shortest such step, to the centimetre: written 1 cm shorter (a walk
+    # in the script, the pick after it), the same margin is negative.
+    shorter = HOLD_11KG.read_text().replace(
+        "  - {action: pick, object: block, start: 0.5, duration: 2.0}\n",
+        f"  - {{action: walk, distance: [{step - 0.01:.2f}, 0], start: 0.5, "
+        f"duration: {2 * period:g}}}\n"
+        f"  - {{action: pick, object: block, start: {0.5 + 2 * period:g}, duration: 2.0}}\n",
+    )
+    short_plan = compile_plan(scenario_from_text(shorter))
+    assert not any("starts with a step" in n for n in short_plan.notes)
+    short_pick = next(t for t in short_plan.tasks if t.action == "pick")
+    short = pick_lift_margin(short_plan, scenario.robot, short_pick.index, slack=-tol)
+    assert short is not None and short.margin < 0.0
+
+
+def _refusal(text: str) -> PlanError:
+    with pytest.raises(PlanError) as info:
+        compile_plan(scenario_from_text(text))
+    exc = info.value
+    assert exc.loc == ("tasks", 1) and exc.task_index == 1
+    return exc
+
+
+def test_a_lift_no_step_mends_is_refused_with_the_mass_and_distance_that_balance() -> None:
+    # The table's front 0.15 m from the trunk: the toes (and shins) need the robot's
+    # footprint radius, 0.134 m, so no step of STEP_IN_MIN fits.
+    text = HOLD_11KG.read_text().replace("position: [0.48, 0.0, 0.0]", "position: [0.35, 0.0, 0.0]")
+    exc = _refusal(text)
+    assert exc.message == LIFT_REFUSAL + "the fixtures in front leave no room for the feet"
+    # The advice holds: the mass it names, or the block that much nearer.
+    compile_plan(scenario_from_text(text.replace("mass: 11.0", "mass: 8.0")))
+    compile_plan(scenario_from_text(text.replace("[0.356, 0.0, 0.543]", "[0.276, 0.0, 0.543]")))
+
+
+def test_a_lift_is_refused_when_another_task_takes_the_time_to_step() -> None:
+    # A turn right after the pick's written end (and back before the put-back): the step
+    # (two gait cycles) would push the pick into it.
+    text = HOLD_11KG.read_text().replace(
+        "  - {action: stand, start: 2.5, duration: 3.0}\n",
+        "  - {action: turn, angle: 30, start: 2.6, duration: 1.0}\n"
+        "  - {action: turn, angle: -30, start: 3.8, duration: 1.0}\n",
+    )
+    exc = _refusal(text)
+    assert exc.message.startswith("infeasible (lift): lifting 'block' (11 kg, ")
+    assert exc.message.endswith(
+        "; stepping nearer first does not mend it: turn (task 2) leaves no time for it before "
+        "3.30 s (the pick's 2.00 s after 0.80 s of stepping)"
+    )
