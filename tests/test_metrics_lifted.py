@@ -25,7 +25,10 @@ SCRIPT = Path(__file__).resolve().parents[1] / "scenarios" / "standing-load.yaml
 
 
 def _record(
-    rise: float, fall_time: float | None = None, down_at: float | None = None
+    rise: float,
+    fall_time: float | None = None,
+    down_at: float | None = None,
+    aside_at: float | None = None,
 ) -> tuple[Scenario, Plan, RunRecord]:
     scenario = load_scenario(SCRIPT)
     plan = compile_robot_plan(scenario)
@@ -41,7 +44,9 @@ def _record(
         up = rise * min(1.0, max(0.0, (t - hold.lift) / 0.2))
         if down_at is not None and t >= down_at:
             up = 0.0
-        rec.object_positions.setdefault("block", []).append(start + np.array([0.0, 0.0, up]))
+        # Carried beside the table (a side-carry): a whole table width to the side.
+        side = scenario.fixtures["table"].size[1] if aside_at is not None and t >= aside_at else 0.0
+        rec.object_positions.setdefault("block", []).append(start + np.array([0.0, side, up]))
     rec.grasp_events.append((hold.grasp, "grasp", "block"))
     rec.held_at_end.add("block")
     rec.sim_time = rec.t[-1]
@@ -83,3 +88,22 @@ def test_a_fall_before_the_pick_ends_is_the_fall_alone() -> None:
     metrics = compute_metrics(scenario, plan, rec, RunOptions(log=False), None)
     assert "pick.block" not in metrics["expectations"]
     assert metrics["expectations"]["no_fall"]["ok"] is False
+
+
+def test_a_block_carried_low_beside_its_table_is_held() -> None:
+    # Raised 3 cm, then carried a table's width to the side at 0.5 cm above its grip height
+    # (HECTOR seed 83021's side-carries rode 0.8-0.9 cm above it): in the hands, off the
+    # table, held; at the same height over the table it is not.
+    scenario, plan, rec = _record(rise=0.03, down_at=3.0, aside_at=2.9)
+    for i, t in enumerate(rec.t):
+        if t >= 3.0:
+            rec.object_positions["block"][i] = rec.object_positions["block"][i] + [0, 0, 0.005]
+    metrics = compute_metrics(scenario, plan, rec, RunOptions(log=False), None)
+    assert "pick.block" not in metrics["expectations"]
+    scenario, plan, rec = _record(rise=0.03, down_at=3.0)
+    for i, t in enumerate(rec.t):
+        if t >= 3.0:
+            rec.object_positions["block"][i] = rec.object_positions["block"][i] + [0, 0, 0.005]
+    metrics = compute_metrics(scenario, plan, rec, RunOptions(log=False), None)
+    value = metrics["expectations"]["pick.block"]["value"]
+    assert value.startswith("'block' was not held: 0.005 m above where it was gripped at 3.00 s")

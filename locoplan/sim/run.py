@@ -39,6 +39,7 @@ from locoplan.plan import Plan
 from locoplan.render.samples import RenderSample
 from locoplan.robot.description import RobotDescription, load_robot_description
 from locoplan.scenario import Scenario
+from locoplan.scenario.model import FixtureSpec
 from locoplan.sim.live import LiveView, Pacer
 from locoplan.sim.loop import RECORD_PERIOD, ClosedLoop, Push, RunRecord
 from locoplan.sim.robot_plan import compile_robot_plan, plan_robot
@@ -160,6 +161,12 @@ def _object_state(
     return [round(float(x), 4) for x in pos], on, lifted
 
 
+def _over_top(fixture: FixtureSpec, p: np.ndarray) -> bool:
+    """Whether the point `p` (world) lies over the fixture's top (inside its footprint)."""
+    lx, ly = fixture.local_xy(float(p[0]), float(p[1]))
+    return abs(lx) <= fixture.size[0] / 2 and abs(ly) <= fixture.size[1] / 2
+
+
 def _on_fixture(scenario: Scenario, name: str, p: np.ndarray, fixture: str) -> bool:
     """Whether the object's centre `p` is over the fixture's top with its bottom on it."""
     spec = scenario.objects[name]
@@ -230,18 +237,23 @@ def _object_goal_times(scenario: Scenario, plan: Plan, rec: RunRecord) -> dict[i
     return out
 
 
-def _not_held(plan: Plan, rec: RunRecord) -> dict[str, str]:
+def _not_held(scenario: Scenario, plan: Plan, rec: RunRecord) -> dict[str, str]:
     """The objects that a pick gripped but that were not held off their support from the
     pick's end to the start of their release (drop or throw; the run's end if none), with the
     run going on, standing, through that window: object -> what happened.
 
-    Held means at least HELD_TOL above where the grasp closed, at every sample of that
-    window (the pick's own goal, LIFT_TOL once, is met by a box that rises 2 cm and goes
-    back down). Why: a heavy box far out that the robot cannot lift stays on its
+    Held means at least HELD_TOL above where the grasp closed at every sample of that window
+    at which the object is over the top of the fixture it was picked from (anywhere, for one
+    picked from no fixture); the pick's own goal, LIFT_TOL once, is met by a box that rises
+    2 cm and goes back down. Why: a heavy box far out that the robot cannot lift stays on its
     table (or rises a centimetre or two and goes back down); the hands push it across the
     top while the robot leans, and a standing hold that puts it back "onto" the same table
     met its `placed` expectation without holding it (HECTOR envelope seeds 79021 and 81021:
-    standing holds of 8.7-13.6 kg 0.29-0.40 m out had counted as successes)."""
+    standing holds of 8.7-13.6 kg 0.29-0.40 m out had counted as successes). Only over that
+    fixture: carried away from it, a box may ride lower than it was gripped and still be in
+    the hands (HECTOR seed 83021: four side-carries of 4.7-4.9 kg, carried 0.8-0.9 cm above
+    their grip height beside the table, had failed as not held, as had transfer-039 of seed
+    82021 in its turn)."""
     t = np.asarray(rec.t)
     out: dict[str, str] = {}
     if not t.size:
@@ -267,13 +279,19 @@ def _not_held(plan: Plan, rec: RunRecord) -> dict[str, str]:
         ]
         if not grasps:
             continue
-        z = np.asarray(rec.object_positions[name])[:, 2]
+        traj = np.asarray(rec.object_positions[name])
+        z = traj[:, 2]
         i0 = int(np.searchsorted(t, grasps[0]))
         window = (t >= task.end - 1e-9) & (t <= t1 + 1e-9)
         if i0 >= len(z) or not window.any():
             continue
         dz = z - z[i0]
-        low = np.nonzero(window & (dz < HELD_TOL))[0]
+        support = [f for f in scenario.fixtures if _on_fixture(scenario, name, traj[i0], f)]
+        over = np.ones(len(t), dtype=bool)
+        if support:
+            fixture = scenario.fixtures[support[0]]
+            over = np.array([_over_top(fixture, p) for p in traj])
+        low = np.nonzero(window & over & (dz < HELD_TOL))[0]
         if low.size == 0:
             continue
         rose = float(np.max(dz[i0 : int(np.nonzero(window)[0][-1]) + 1]))
@@ -361,7 +379,7 @@ def compute_metrics(
             "value": f"hands {gap:.3f} m from '{name}' at the planned grasp",
             "limit": "within 0.03 m (the object may be out of reach)",
         }
-    for name, what in _not_held(plan, rec).items():
+    for name, what in _not_held(scenario, plan, rec).items():
         results.setdefault(
             f"pick.{name}",
             {
