@@ -107,3 +107,20 @@ def test_a_lift_is_refused_when_another_task_takes_the_time_to_step() -> None:
         "; stepping nearer first does not mend it: turn (task 2) leaves no time for it before "
         "3.30 s (the pick's 2.00 s after 0.80 s of stepping)"
     )
+
+
+def test_a_lift_is_refused_when_the_step_would_end_the_pick_after_the_run() -> None:
+    # The pick is the last task and the run ends 0.5 s after it: two gait cycles of stepping
+    # (0.8 s) would move its end past the run's.
+    text = (
+        HOLD_11KG.read_text()
+        .replace("  - {action: stand, start: 2.5, duration: 3.0}\n", "")
+        .replace("  - {action: drop, object: block, onto: table, start: 5.5, duration: 1.5}\n", "")
+        .replace("end: 8.0", "end: 3.0")
+        .replace(", placed: {block: table}", "")
+    )
+    exc = _refusal(text)
+    assert exc.message.endswith(
+        "; stepping nearer first does not mend it: the pick would end at 3.30 s (after 0.80 s "
+        "of stepping), after the run's end at 3.00 s"
+    )

@@ -152,6 +152,12 @@ def _step_in_for_the_lift(
         )
     if any(h.lift < end and h.release > start for h in plan.holds if h.pick_task != pick.index):
         raise _no_step(exc, "another object is held then")
+    if later.end > plan.t_end + _END_TOLERANCE:
+        raise _no_step(
+            exc,
+            f"the pick would end at {later.end:.2f} s (after {end - start:.2f} s of stepping), "
+            f"after the run's end at {plan.t_end:.2f} s",
+        )
     x, y, yaw, _, _, _ = plan.trunk.pose_at(start)
     c, s = math.cos(yaw), math.sin(yaw)
     obstacles = [fixture_obstacle(n, f) for n, f in scenario.fixtures.items()]
@@ -210,7 +216,9 @@ def _step_in_for_the_lift(
             break
     try:
         check_lift(best, scenario.robot)
-    except InfeasiblePlanError:
+    except InfeasiblePlanError as again:
+        if again.task_index != exc.task_index:
+            raise
         most = ", the most the stride and the fixtures allow" if cm == high else ""
         raise _no_step(exc, f"even {cm / 100.0:.2f} m nearer{most}") from None
     return best
