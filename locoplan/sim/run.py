@@ -172,16 +172,16 @@ def _on_fixture(scenario: Scenario, name: str, p: np.ndarray, fixture: str) -> b
     spec = scenario.objects[name]
     half_h = spec.size[0] if spec.shape == "sphere" else spec.size[2] / 2
     f = scenario.fixtures[fixture]
-    lx, ly = f.local_xy(float(p[0]), float(p[1]))
-    reach_x = f.size[0] / 2
     if f.kind == "conveyor" and f.speed:
         # A belt delivers what it carries over its downstream end: an object riding off that
         # end at belt height (its footprint still partly on the belt) is on the conveyor.
+        lx, ly = f.local_xy(float(p[0]), float(p[1]))
+        reach_x = f.size[0] / 2
         ahead = spec.size[0] if spec.shape == "sphere" else 0.5 * max(spec.size[0], spec.size[1])
         inside_x = -reach_x <= lx * math.copysign(1.0, f.speed) <= reach_x + ahead
+        inside = inside_x and abs(ly) <= f.size[1] / 2
     else:
-        inside_x = abs(lx) <= reach_x
-    inside = inside_x and abs(ly) <= f.size[1] / 2
+        inside = _over_top(f, p)
     return inside and abs(p[2] - half_h - f.size[2]) <= ON_FIXTURE_TOL
 
 
