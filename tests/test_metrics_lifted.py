@@ -2,7 +2,8 @@
 is a failed expectation.
 
 Synthetic run records (the metrics are a pure function of the record): the repository's
-standing hold, its block gripped at the planned grasp and then left on its table (HECTOR
+standing hold with a 10 kg block (its plan has no step before the pick, so the pick ends at its
+written 2.5 s), its block gripped at the planned grasp and then left on its table (HECTOR
 envelope seed 81021, standing-hold-006, which its `placed` expectation passed), raised 3 cm
 and put back down (seed 79021, standing-hold-022), or raised 5 cm and held. The tolerance
 is HELD_TOL (1 cm): an object left on its table stays within 0.3 cm of where it was gripped."""
@@ -30,7 +31,8 @@ def _record(
     down_at: float | None = None,
     aside_at: float | None = None,
 ) -> tuple[Scenario, Plan, RunRecord]:
-    scenario = load_scenario(SCRIPT)
+    text = SCRIPT.read_text().replace("mass: 14.0", "mass: 10.0")
+    scenario = load_scenario(SCRIPT, text)
     plan = compile_robot_plan(scenario)
     pick = next(t for t in plan.tasks if t.action == "pick")
     hold = plan.holds[0]
@@ -53,7 +55,7 @@ def _record(
     rec.wall_time = 1.0
     if fall_time is not None:
         rec.fell, rec.fall_time = True, fall_time
-    assert pick.end < plan.t_end
+    assert pick.end == 2.5 and pick.end < plan.t_end
     return scenario, plan, rec
 
 

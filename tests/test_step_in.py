@@ -124,3 +124,49 @@ def test_a_lift_is_refused_when_the_step_would_end_the_pick_after_the_run() -> N
         "; stepping nearer first does not mend it: the pick would end at 3.30 s (after 0.80 s "
         "of stepping), after the run's end at 3.00 s"
     )
+
+
+STANDING_LOAD = Path(__file__).resolve().parents[1] / "scenarios" / "standing-load.yaml"
+
+
+def test_a_lift_that_balances_only_with_the_grasp_tolerance_steps_nearer_first() -> None:
+    # The paper's 14 kg hold: its lift-off balances with the trunk leaned the grasp
+    # tolerance past the arms' room (`check_lift` accepts it, 0.5 cm inside the toes) and
+    # not with the room alone (1.1 cm past). Where a step fits, the planner takes one
+    # rather than rest the lift on the hands closing short of their grip.
+    scenario = scenario_from_text(STANDING_LOAD.read_text())
+    tol = HECTOR_GEOMETRY.grasp_tolerance
+    written = next(t for t in scenario.tasks if t.action == "pick")
+    plan = compile_plan(scenario)
+    walk = next(t for t in plan.tasks if t.action == "walk")
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    step = walk.distance[0] if walk.distance else 0.0
+    assert walk.start == pytest.approx(written.start)
+    assert pick.start == pytest.approx(walk.end)
+    assert pick.end - pick.start == pytest.approx(written.duration)
+    assert STEP_IN_MIN <= step <= HECTOR_GEOMETRY.walk_stride
+    assert any(
+        n.startswith(f"the pick of 'block' starts with a step {step:.2f} m nearer")
+        and n.endswith("from where the robot stands the lift-off would rest on the grasp tolerance")
+        for n in plan.notes
+    ), plan.notes
+    after = pick_lift_margin(plan, scenario.robot, pick.index, slack=-tol)
+    assert after is not None and after.margin >= 0.0
+    # Where a task takes the step's time, the written stance stays: accepted, no step.
+    busy = STANDING_LOAD.read_text().replace(
+        "  - {action: stand, start: 2.5, duration: 5.0}\n",
+        "  - {action: turn, angle: 20, start: 2.6, duration: 1.0}\n"
+        "  - {action: stand, start: 3.6, duration: 3.9}\n",
+    )
+    assert busy != STANDING_LOAD.read_text()
+    busy_scenario = scenario_from_text(busy)
+    as_written = compile_plan(busy_scenario)
+    assert not any(t.action == "walk" for t in as_written.tasks)
+    assert not any("starts with a step" in n for n in as_written.notes)
+    busy_pick = next(t for t in as_written.tasks if t.action == "pick")
+    margins = [
+        pick_lift_margin(as_written, busy_scenario.robot, busy_pick.index, slack=s)
+        for s in (tol, 0.0)
+    ]
+    assert margins[0] is not None and margins[0].margin >= 0.0
+    assert margins[1] is not None and margins[1].margin < 0.0
