@@ -117,6 +117,40 @@ def _chord_ends(p: np.ndarray, u: np.ndarray, hull: np.ndarray) -> tuple[float, 
     return behind, ahead
 
 
+def test_the_held_lean_is_taken_from_the_feet_as_they_stand() -> None:
+    """While the load is held (lean weight 1) with both feet standing 5 cm behind where the
+    plan put them (a turn in place that drifted: HECTOR envelope seed 83021, dynamic
+    transfer-005), the whole shift that `_com_shift` returns for the measured support leaves
+    the robot's own CoM the load's shift s behind its nominal place over the feet: the plan's
+    shift and how far the reference stands ahead of that place (`chord_offsets`), along the
+    load's direction, to 1e-9 m. Rows where the feet no longer stand as now (`standing`
+    False) keep the plan's shift."""
+    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    (hold,) = plan.holds
+    t = np.array([0.5 * (hold.lift + hold.release)] * 2)
+    assert ctl._lean_weights(t) == pytest.approx(1.0, abs=1e-12)
+    mass = np.full(2, hold.mass)
+    p_com, *_ = ctl._com_reference(t)
+    sole = p_com[0, :2] - ctl.com_offset[:2]
+    back = 0.05
+    feet = np.array([[sole[0] - back, 0.09, 0.0], [sole[0] - back, -0.09, 0.0]])
+    hull = convex_hull(foot_segments(feet, np.zeros(2), desc.foot_toe, desc.foot_heel))
+    p = p_com[0, :2]
+    standing = np.array([True, False])
+    measured = ctl._com_shift(t, mass, p_com, (p, hull), standing)
+    nominal = ctl._com_shift(t, mass, p_com)
+    u = -nominal[0] / np.linalg.norm(nominal[0])
+    assert u[0] > 0.99  # the block ahead (+x): the shift points back
+    # How far the reference stands ahead of its nominal place over these feet: the 5 cm
+    # (to the sole sites' 2 mm offset from the trunk's axis in the nominal pose).
+    excess = chord_offsets(p, u[None], hull)[0] - ctl._support_offset
+    assert excess == pytest.approx(back, abs=5e-3)
+    assert float(np.dot(nominal[0] - measured[0], u)) == pytest.approx(excess, abs=1e-9)
+    np.testing.assert_allclose(measured[1], nominal[1], atol=1e-12)
+
+
 TURN_BETWEEN_FIXTURES = """
 version: 1
 name: turn-between-fixtures

@@ -1031,13 +1031,21 @@ class LocoManipulationController:
             c0, c1 = p_feet_now[:2, :2] + mid * heading[:2]
             inside = share_between_feet(inside, c0, c1, STAND_FOOT_SHARE)
             self._stand_offset = inside - p_all[0, :2]
-        shift = (
-            self._com_shift(
-                t_lead,
-                mass_lead,
-                p_all[N + 1 + n_td :],
-                None if hull is None else (p_all[0, :2] + self._stand_offset, hull),
+        support: tuple[FloatArray, FloatArray] | None = None
+        standing: BoolArray | None = None
+        if hull is not None:
+            support = (p_all[0, :2] + self._stand_offset, hull)
+        elif loaded and contact[0].all():
+            # Both feet down now, a step later in the horizon: the feet as they stand count
+            # for the rows before it (`_com_shift`).
+            hull_now = convex_hull(
+                foot_segments(p_feet_now, yaw_feet_now, self.desc.foot_toe, self.desc.foot_heel)
             )
+            support = (p_all[0, :2], hull_now)
+            through = np.cumprod(contact.all(axis=1)).astype(bool)
+            standing = np.concatenate(([True], through))
+        shift = (
+            self._com_shift(t_lead, mass_lead, p_all[N + 1 + n_td :], support, standing)
             if loaded
             else np.zeros((N + 1, 2))
         )
@@ -1466,6 +1474,7 @@ class LocoManipulationController:
         mass: FloatArray,
         p_com: FloatArray,
         support: tuple[FloatArray, FloatArray] | None = None,
+        standing: BoolArray | None = None,
     ) -> FloatArray:
         """CoM reference shift (n, 2) for held loads: the robot's CoM moves away from the
         object by the share `_lean_share` of s = m_o d / (m + m_o), the shift that would put
@@ -1493,10 +1502,25 @@ class LocoManipulationController:
         Where a hold leans before its lift-off (`_pre_lean`), the larger of the two shifts
         counts.
 
+        Where the feet stand (`support`), the shift is taken from where they are, not from
+        where the plan put them: the whole shift (lean weight 1) leaves the robot's own CoM
+        the load's shift s behind its nominal place over the feet, i.e. s plus how far the
+        reference stands ahead of that place along the load's direction (the offset's
+        excess over the nominal one, `_support_offset`; the equal-margin share, weight 0,
+        already counts the offset: `_lean_share`), and the pre-lift lean likewise
+        (`_pre_lean`). Why: a turn in place or a walk can leave the feet centimetres off
+        the plan while the reference stays the plan's; the shift from the plan then centred
+        the combined CoM that far off the feet (HECTOR envelope seed 83021, dynamic
+        transfer-005: the robot stood 5 cm behind its plan after a 110 deg turn, the 5.48 kg
+        parcel came on with the combined CoM 0.5 cm inside the toes, the MPC cut the
+        vertical force to f_min to keep the pitch, the trunk sank 10 cm and the parcel went
+        back onto its table).
+
         From the lead times t_lead (n,) (the times concerned + LOAD_LEAD), the carried mass
-        there (n,) kg and the CoM reference there (n, 3) m; `support` is (p, hull) while both
-        feet stand through the horizon: the CoM reference now (2,) over the feet and the
-        feet's support polygon (`_lean_share`'s offset then comes from where the feet are)."""
+        there (n,) kg and the CoM reference there (n, 3) m; `support` is (p, hull) where both
+        feet stand: the CoM reference now (2,) and the feet's support polygon; `standing`
+        (n,) marks the rows the feet still stand as they do now (None: all of them; the
+        others take the nominal offset)."""
         d = self._planned_object_positions(self._held_times(t_lead))[:, :2] - p_com[:, :2]
         d_now = (
             self._planned_object_positions(self._held_times(t_lead - LOAD_LEAD))[:, :2]
@@ -1506,24 +1530,48 @@ class LocoManipulationController:
         d = np.where(far[:, None], d_now, d)
         s = (mass / (self.mass + mass))[:, None] * d
         size = np.linalg.norm(s, axis=1)
-        offset: FloatArray | None = None
-        if support is not None:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                unit = np.where(size[:, None] > 1e-9, s / size[:, None], 0.0)
-            offset = chord_offsets(support[0], unit, support[1])
-            offset = np.where(np.isfinite(offset), offset, self._support_offset)
-        share = self._lean_share(size, self._lean_weights(t_lead), offset)
-        shift = -share[:, None] * s
-        pre = self._pre_lean(t_lead - LOAD_LEAD, p_com)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            unit = np.where(size[:, None] > 1e-9, s / size[:, None], 0.0)
+        weights = self._lean_weights(t_lead)
+        offset = self._offsets(support, standing, unit)
+        along = self._lean_share(size, weights, offset) * size
+        if offset is not None:
+            along = np.maximum(along + weights * (offset - self._support_offset), 0.0)
+        shift = -along[:, None] * unit
+        pre = self._pre_lean(t_lead - LOAD_LEAD, p_com, support, standing)
         bigger = np.einsum("ij,ij->i", pre, pre) > np.einsum("ij,ij->i", shift, shift)
         return np.where(bigger[:, None], pre, shift)
 
-    def _pre_lean(self, t: FloatArray, p_com: FloatArray) -> FloatArray:
+    def _offsets(
+        self,
+        support: tuple[FloatArray, FloatArray] | None,
+        standing: BoolArray | None,
+        unit: FloatArray,
+    ) -> FloatArray | None:
+        """How far (n,) m the reference `support[0]` stands ahead of the middle of the feet's
+        polygon `support[1]` along each unit direction `unit` (n, 2) (`chord_offsets`), the
+        nominal `_support_offset` where that is undefined (outside the polygon, no direction)
+        or the feet no longer stand as they do (`standing` False); None without `support`."""
+        if support is None:
+            return None
+        offset = chord_offsets(support[0], unit, support[1])
+        if standing is not None:
+            offset = np.where(standing, offset, np.nan)
+        return np.where(np.isfinite(offset), offset, self._support_offset)
+
+    def _pre_lean(
+        self,
+        t: FloatArray,
+        p_com: FloatArray,
+        support: tuple[FloatArray, FloatArray] | None = None,
+        standing: BoolArray | None = None,
+    ) -> FloatArray:
         """CoM reference shift (n, 2) at the times t (n,) that has each hold's equal-margin
         share of the load shift (`_lean_share` with weight 0) in place by its planned lift-off,
         for the object where it is gripped then (from the CoM reference p_com (n, 3)),
         capped at the hold's `pre_lean` (the room the arms' reach leaves at the grasp, from
-        the plan). It eases in over `_pre_lean_windows` before the lift-off and stays until
+        the plan); with `support` and `standing` (`_com_shift`), the share for the feet as
+        they stand. It eases in over `_pre_lean_windows` before the lift-off and stays until
         LOAD_RAMP after it, where the measured load has taken over (`shift_mass`);
         `_com_shift` takes it where it is the larger. It stays the lean for the object where
         it was lifted while the hands pull it in: with the offsets the shift counts after the
@@ -1545,10 +1593,11 @@ class LocoManipulationController:
                 continue
             s = (h.mass / (self.mass + h.mass)) * (p_o[None, :] - p_com[:, :2])
             size = np.linalg.norm(s, axis=1)
-            x = np.minimum(self._lean_share(size, np.zeros(len(t))) * size, h.pre_lean)
-            ramp = np.where(inside, smoothstep_array((t - t0) / (t1 - t0)), 0.0)
             with np.errstate(divide="ignore", invalid="ignore"):
                 unit = np.where(size[:, None] > 1e-9, s / size[:, None], 0.0)
+            offset = self._offsets(support, standing, unit)
+            x = np.minimum(self._lean_share(size, np.zeros(len(t)), offset) * size, h.pre_lean)
+            ramp = np.where(inside, smoothstep_array((t - t0) / (t1 - t0)), 0.0)
             out -= (ramp * x)[:, None] * unit
         return out
 
