@@ -41,9 +41,14 @@ tasks:
 """
 
 
-def hold_script(mass: float, robot: str | None = None) -> str:
-    """A standing hold from a table in front, put back (issue 12's hold-11kg geometry)."""
+def hold_script(mass: float, robot: str | None = None, step_time: bool = True) -> str:
+    """A standing hold from a table in front, put back (issue 12's hold-11kg geometry).
+    `step_time` False: the put-back starts 0.7 s after the pick, which leaves no time for
+    the step nearer that the planner takes before a heavy standing lift
+    (`compiler._step_in_off_the_tolerance`), so the robot lifts from where the script
+    stands it (for tests of the poses and margins of that stance)."""
     head = f"robot: {robot}\n" if robot else ""
+    stand, drop = ("3.0", "5.5") if step_time else ("0.7", "3.2")
     return f"""version: 1
 name: hold
 {head}objects:
@@ -53,7 +58,7 @@ fixtures:
 tasks:
   - {{action: stand, start: 0.0, duration: 0.5}}
   - {{action: pick, object: block, start: 0.5, duration: 2.0}}
-  - {{action: stand, start: 2.5, duration: 3.0}}
-  - {{action: drop, object: block, onto: table, start: 5.5, duration: 1.5}}
+  - {{action: stand, start: 2.5, duration: {stand}}}
+  - {{action: drop, object: block, onto: table, start: {drop}, duration: 1.5}}
 end: 8.0
 """

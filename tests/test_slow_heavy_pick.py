@@ -34,14 +34,16 @@ def _short(mass: float, drop_at: float = 5.5) -> str:
 
 
 def test_a_short_heavy_standing_pick_lasts_the_minimum_with_a_note() -> None:
+    # The planner steps nearer first (`compiler._step_in_off_the_tolerance`); the pick then
+    # starts after the step and lasts the minimum, not its written 1.0 s.
     plan = compile_plan(scenario_from_text(_short(7.0)))
-    pick = plan.tasks[1]
-    assert pick.action == "pick"
-    assert (pick.start, pick.end) == (0.5, pytest.approx(0.5 + HEAVY_PICK_MIN))
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    walk = next(t for t in plan.tasks if t.action == "walk")
+    assert walk.start == 0.5 and pick.start == pytest.approx(walk.end)
+    assert pick.end == pytest.approx(pick.start + HEAVY_PICK_MIN)
     assert any(
-        n.startswith(
-            "the pick of 'block' (7 kg, 0.36 m ahead) written from 0.50 s to 1.50 s ends at 2.50 s"
-        )
+        n.startswith("the pick of 'block' (7 kg, ")
+        and f"ends at {pick.end:.2f} s so that its weight comes on slowly" in n
         for n in plan.notes
     ), plan.notes
 
@@ -69,9 +71,12 @@ def test_a_heavy_block_picked_slowly_is_held(tmp_path: Path) -> None:
     assert m["objects"]["block"]["on"] == "table"
     assert "pick.block" not in m["expectations"]  # held from the pick's end to the drop
     assert m["task_goal_times"][1] is not None
-    # The plan's pick ends at 2.5 s; the block rests at 0.577 m: held at least 4 cm up
-    # from then until the drop starts at 4.85 s (measured 6.7-7.0 cm; before: at most 2 cm,
-    # and back on the table).
+    # The plan's pick ends at 2.5 s (3.3 s since the planner steps nearer first: the paper's
+    # 2 s after the step's 0.8 s); the block rests at 0.577 m: held at least 4 cm up from
+    # then until the drop starts at 4.85 s (measured 6.7-7.0 cm before the step; before the
+    # slow pick: at most 2 cm, and back on the table).
+    pick_end = next(t.end for t in result.plan.tasks if t.action == "pick")
+    assert pick_end <= 3.3 + 1e-9
     assert result.log_path is not None
     heights = [
         (t, e.cubes[0].pose.position.z)
@@ -79,5 +84,5 @@ def test_a_heavy_block_picked_slowly_is_held(tmp_path: Path) -> None:
         for e in msg.entities
         if e.id.startswith("object/block") and e.cubes
     ]
-    held = np.array([z for t, z in heights if 2.5 <= t <= 4.85])
+    held = np.array([z for t, z in heights if pick_end <= t <= 4.85])
     assert held.size and held.min() >= 0.577 + 0.04, held.min()
