@@ -1018,32 +1018,26 @@ class LocoManipulationController:
         )
         p_all, v_all, yaw_all, w_all, pb_all = self._com_reference(eval_times)
         contact = self.recovery.flags(times, np.asarray(plan.contact_flags(times), dtype=bool))
-        hull: FloatArray | None = None
         self._stand_offset = np.zeros(2)
-        if contact.all():
-            # Standing through the horizon: the reference over the feet (STAND_SUPPORT_MARGIN).
+        support: tuple[FloatArray, FloatArray] | None = None
+        standing: BoolArray | None = None
+        if contact[0].all() and (loaded or contact.all()):
             hull = convex_hull(
                 foot_segments(p_feet_now, yaw_feet_now, self.desc.foot_toe, self.desc.foot_heel)
             )
-            inside = clamp_into_support(p_all[0, :2], hull, STAND_SUPPORT_MARGIN)
-            mid = (self.desc.foot_toe - self.desc.foot_heel) / 2.0
-            heading = np.stack((np.cos(yaw_feet_now), np.sin(yaw_feet_now)), axis=1)
-            c0, c1 = p_feet_now[:2, :2] + mid * heading[:2]
-            inside = share_between_feet(inside, c0, c1, STAND_FOOT_SHARE)
-            self._stand_offset = inside - p_all[0, :2]
-        support: tuple[FloatArray, FloatArray] | None = None
-        standing: BoolArray | None = None
-        if hull is not None:
+            if contact.all():
+                # Standing through the horizon: the reference over the feet
+                # (STAND_SUPPORT_MARGIN).
+                inside = clamp_into_support(p_all[0, :2], hull, STAND_SUPPORT_MARGIN)
+                mid = (self.desc.foot_toe - self.desc.foot_heel) / 2.0
+                heading = np.stack((np.cos(yaw_feet_now), np.sin(yaw_feet_now)), axis=1)
+                c0, c1 = p_feet_now[:2, :2] + mid * heading[:2]
+                inside = share_between_feet(inside, c0, c1, STAND_FOOT_SHARE)
+                self._stand_offset = inside - p_all[0, :2]
+            # The feet as they stand count for the rows before the horizon's first step
+            # (`_com_shift`; all of them while standing through it).
             support = (p_all[0, :2] + self._stand_offset, hull)
-        elif loaded and contact[0].all():
-            # Both feet down now, a step later in the horizon: the feet as they stand count
-            # for the rows before it (`_com_shift`).
-            hull_now = convex_hull(
-                foot_segments(p_feet_now, yaw_feet_now, self.desc.foot_toe, self.desc.foot_heel)
-            )
-            support = (p_all[0, :2], hull_now)
-            through = np.cumprod(contact.all(axis=1)).astype(bool)
-            standing = np.concatenate(([True], through))
+            standing = np.concatenate(([True], np.cumprod(contact.all(axis=1)).astype(bool)))
         shift = (
             self._com_shift(t_lead, mass_lead, p_all[N + 1 + n_td :], support, standing)
             if loaded
