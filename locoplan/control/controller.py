@@ -712,6 +712,8 @@ class LocoManipulationController:
         # The footholds' gain on the CoM's position error (s; `POSITION_CONVERGENCE_TIME`).
         self._position_gain = 2.0 * above_soles / (GRAVITY * POSITION_CONVERGENCE_TIME)
         self._last_touchdowns: dict[float, bool] = {}
+        # `_free_to_step`'s sample offsets per lead (np.linspace costs 10 us a call).
+        self._step_samples: dict[float, FloatArray] = {}
         # How far the nominal CoM stands ahead of the middle of the feet's support (m, along
         # the feet; robot.yaml's toe and heel about the sole site): see `_lean_share`.
         sole_x = float(np.mean(self.foot_offsets[:, 0]))
@@ -830,7 +832,11 @@ class LocoManipulationController:
         foot rose as the block came off its table; the stance hip pitch saturated and the
         robot fell (seed 76021, standing-hold-014, both strategies). Without the step it
         holds the block."""
-        ahead = t + np.linspace(0.0, lead + 2.0 * self.plan.gait_swing, 8)
+        offsets = self._step_samples.get(lead)
+        if offsets is None:
+            offsets = np.linspace(0.0, lead + 2.0 * self.plan.gait_swing, 8)
+            self._step_samples[lead] = offsets
+        ahead = t + offsets
         if not bool(np.all(self.plan.contact_flags(ahead))):
             return False
         return not bool(np.any(self.plan.hand_contact_flags(ahead)))
@@ -1515,11 +1521,12 @@ class LocoManipulationController:
         feet stand: the CoM reference now (2,) and the feet's support polygon; `standing`
         (n,) marks the rows the feet still stand as they do now (None: all of them; the
         others take the nominal offset)."""
-        d = self._planned_object_positions(self._held_times(t_lead))[:, :2] - p_com[:, :2]
-        d_now = (
-            self._planned_object_positions(self._held_times(t_lead - LOAD_LEAD))[:, :2]
-            - p_com[:, :2]
-        )
+        n = len(t_lead)
+        both = self._planned_object_positions(
+            self._held_times(np.concatenate([t_lead, t_lead - LOAD_LEAD]))
+        )[:, :2]
+        d = both[:n] - p_com[:, :2]
+        d_now = both[n:] - p_com[:, :2]
         far = np.einsum("ij,ij->i", d_now, d_now) > np.einsum("ij,ij->i", d, d)
         d = np.where(far[:, None], d_now, d)
         s = (mass / (self.mass + mass))[:, None] * d

@@ -51,13 +51,30 @@ def convex_hull(points: FloatArray) -> FloatArray:
     return np.array(lower[:-1] + upper[:-1])
 
 
+# The last polygon `_half_planes` was asked for and its half-planes: an MPC update asks for
+# the same feet's polygon up to three times (`clamp_into_support`, `chord_offsets` for the
+# held-load lean and for the pre-lift lean), 25 us each.
+_LAST_PLANES: list[tuple[bytes, FloatArray, FloatArray]] = []
+
+
 def _half_planes(hull: FloatArray) -> tuple[FloatArray, FloatArray]:
     """The convex polygon `hull` (m, 2, CCW) as half-planes n . x <= c: unit outward normals
-    (m, 2), one per edge from vertex i to i + 1, and their offsets c (m,)."""
-    edges = np.roll(hull, -1, axis=0) - hull
-    normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # outward for a CCW polygon
+    (m, 2), one per edge from vertex i to i + 1, and their offsets c (m,). Read-only arrays
+    (shared with the next call for the same polygon)."""
+    hull = np.asarray(hull, dtype=float)
+    key = hull.tobytes() + bytes(str(hull.shape), "ascii")
+    if _LAST_PLANES and _LAST_PLANES[0][0] == key:
+        return _LAST_PLANES[0][1], _LAST_PLANES[0][2]
+    edges = np.concatenate((hull[1:], hull[:1])) - hull
+    normals = np.empty_like(edges)  # outward for a CCW polygon
+    normals[:, 0] = edges[:, 1]
+    normals[:, 1] = -edges[:, 0]
     normals /= np.linalg.norm(normals, axis=1)[:, None]
-    return normals, np.einsum("ij,ij->i", normals, hull)
+    offsets = np.einsum("ij,ij->i", normals, hull)
+    normals.flags.writeable = False
+    offsets.flags.writeable = False
+    _LAST_PLANES[:] = [(key, normals, offsets)]
+    return normals, offsets
 
 
 def clamp_into_support(p: FloatArray, hull: FloatArray, margin: float) -> FloatArray:
@@ -118,7 +135,7 @@ def chord_offsets(p: FloatArray, directions: FloatArray, hull: FloatArray) -> Fl
     p = np.asarray(p, dtype=float)
     normals, offsets = _half_planes(hull)
     room = offsets - normals.dot(p)  # n . (p + l u) <= n . v
-    if np.any(room < 0.0):
+    if (room < 0.0).any():
         return out
     nu = u.dot(normals.T)  # (n, m)
     with np.errstate(divide="ignore", invalid="ignore"):

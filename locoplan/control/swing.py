@@ -42,7 +42,7 @@ def smoothstep(u: float) -> float:
 
 def smoothstep_array(u: FloatArray) -> FloatArray:
     """Element-wise `smoothstep` of an array (same shape)."""
-    c = np.clip(u, 0.0, 1.0)
+    c = np.minimum(np.maximum(u, 0.0), 1.0)  # np.clip's dispatch costs 1 us more a call
     return c * c * (3.0 - 2.0 * c)
 
 

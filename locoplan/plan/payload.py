@@ -248,8 +248,10 @@ def equal_margin_share(size: npt.ArrayLike, offset: float | npt.ArrayLike) -> Fl
     the toe (`locoplan.control.controller`'s `_lean_share`, which uses it)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         beta = 0.5 + np.asarray(offset, dtype=float) / np.asarray(size, dtype=float)
-    beta = np.nan_to_num(beta, nan=0.5, posinf=1.0, neginf=0.0)
-    return np.asarray(np.clip(beta, 0.0, 1.0), dtype=float)
+    # NaN (0 / 0) is 1/2; +-inf clip to 1 and 0. (np.where, np.minimum and np.maximum: the
+    # controller calls this twice per MPC update, and np.nan_to_num with np.clip cost 15 us.)
+    beta = np.where(beta != beta, 0.5, beta)
+    return np.asarray(np.minimum(np.maximum(beta, 0.0), 1.0), dtype=float)
 
 
 def lift_lean(model: StaticModel, pose: HeldPose, mass: float) -> float:

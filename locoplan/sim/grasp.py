@@ -134,11 +134,16 @@ class GraspManager:
             for g in range(m.ngeom)
             if int(m.geom_bodyid[g]) in scene.hand_body_ids and int(m.geom_contype[g]) != 0
         }
-        self._hand_geom_array = np.array(sorted(self._hand_geoms), dtype=np.int32)
+        # Per geom id, whether it is a colliding hand geom (a lookup for `hand_load`'s scan
+        # of the contact array: np.isin cost 10 us per tick).
+        self._is_hand_geom = np.zeros(m.ngeom, dtype=bool)
+        self._is_hand_geom[sorted(self._hand_geoms)] = True
         self._trunk_body = mujoco.mj_name2id(
             scene.model, mujoco.mjtObj.mjOBJ_BODY, scene.robot.trunk_body
         )
         self._palm_bodies: set[int] = set()
+        self._quat = np.zeros(4)  # `palm_torques`' scratch for MuJoCo's conversions
+        self._err = np.zeros(3)
 
     def palm_torques(self, data: mujoco.MjData) -> None:
         """Set the palm-bond torques (module docstring) in `data.xfrc_applied` for every object
@@ -159,9 +164,8 @@ class GraspManager:
             R_obj = data.xmat[ob].reshape(3, 3)
             tb = self._trunk_body
             R_des = data.xmat[tb].reshape(3, 3) @ refs
-            quat = np.zeros(4)
+            quat, err = self._quat, self._err
             mujoco.mju_mat2Quat(quat, (R_obj @ R_des.T).reshape(9))
-            err = np.zeros(3)
             mujoco.mju_quat2Vel(err, quat, 1.0)
             rate = data.cvel[ob, 0:3] - data.cvel[tb, 0:3]
             inertia = self._world_inertia(data, ob)
@@ -203,9 +207,9 @@ class GraspManager:
             if data.ncon == 0:
                 continue
             pairs = data.contact.geom[: data.ncon]
+            hand = self._is_hand_geom[pairs]
             touching = np.flatnonzero(
-                ((pairs[:, 0] == obj_geom) & np.isin(pairs[:, 1], self._hand_geom_array))
-                | ((pairs[:, 1] == obj_geom) & np.isin(pairs[:, 0], self._hand_geom_array))
+                ((pairs[:, 0] == obj_geom) & hand[:, 1]) | ((pairs[:, 1] == obj_geom) & hand[:, 0])
             )
             wrench = np.zeros(6)
             for i in touching.tolist():
@@ -220,7 +224,8 @@ class GraspManager:
         """Inertia tensor (3, 3) kg m^2 of `body` about its centre, in world axes (its
         principal axes R_i: R_i diag(I) R_i^T)."""
         R_i = data.ximat[body].reshape(3, 3)
-        return np.asarray(R_i @ np.diag(self.scene.model.body_inertia[body]) @ R_i.T)
+        # (R_i scaled column-wise: R_i diag(I) without forming the diagonal matrix.)
+        return np.asarray((R_i * self.scene.model.body_inertia[body]) @ R_i.T)
 
     def _bond_frequency(self, name: str, hands: tuple[int, ...], data: mujoco.MjData) -> float:
         """`palm_bond_frequency` of object `name` as the grasp closes: the grip line through
