@@ -190,6 +190,7 @@ NULL_SPACE_RTOL = 1e-6
 # an ankle at its limit, the MPC planning up to 46 N m.
 ANKLE_TORQUE_SHARE = 0.8
 OBJECT_CACHE_SIZE = 2000  # memoised planned object positions kept before pruning
+OBJECT_PREFETCH = 4  # MPC updates ahead whose object positions a miss evaluates too
 CLIP_RTOL = 1e-9  # relative excess over a torque limit below which nothing counts as clipped
 
 
@@ -1204,11 +1205,20 @@ class LocoManipulationController:
         MPC update with a held load needs some 40 points (the horizon, the CoM shift 0.3 s
         ahead, now): 0.45 ms per update in scenarios/package-transfer.yaml. The horizon's
         times (t + 0.03 k, t on a 10 ms grid) come back every third update, so nearly every
-        point is already known."""
+        point is already known.
+
+        A call that misses also evaluates the times the next OBJECT_PREFETCH MPC updates
+        will ask for (the missed ones, one to OBJECT_PREFETCH MPC periods later): each call
+        to the plan costs some 100 us before its first point, and without it nearly every
+        update paid that for the two or three points at its horizon's end. The plan gives
+        every time the same value whichever batch it comes in."""
         keys = np.rint(np.asarray(times, dtype=float) * 1e6).astype(np.int64).tolist()
         cache = self._object_cache
-        missing = sorted({k for k in keys if k not in cache})
-        if missing:
+        wanted = {k for k in keys if k not in cache}
+        if wanted:
+            period = round(self.s.mpc_period * 1e6)
+            ahead = {k + j * period for k in wanted for j in range(1, OBJECT_PREFETCH + 1)}
+            missing = sorted(wanted | {k for k in ahead if k not in cache})
             pos = self.plan.object_positions(np.asarray(missing, dtype=float) * 1e-6)
             for k, p in zip(missing, np.asarray(pos, dtype=float), strict=True):
                 cache[k] = p
