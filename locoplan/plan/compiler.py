@@ -802,10 +802,13 @@ def _slow_heavy_standing_picks(
         if end > plan.t_end + 1e-9:
             continue
         by_index[pick.index] = replace(pick, end=end)
+        # The times as the script writes them: after a step nearer (`_step_in_for_the_lift`)
+        # the pick here already starts after the step.
+        written = scenario.tasks[pick.index]
         notes.append(
             f"the pick of '{hold.object}' ({hold.mass:g} kg, {ahead:.2f} m ahead) written "
-            f"from {pick.start:.2f} s to {pick.end:.2f} s ends at {end:.2f} s so that its "
-            f"weight comes on slowly enough for the robot to lean back under it"
+            f"from {written.start:.2f} s to {written.end:.2f} s ends at {end:.2f} s so that "
+            f"its weight comes on slowly enough for the robot to lean back under it"
         )
     if not notes:
         return tasks, ()
