@@ -63,8 +63,9 @@ def _half_planes(hull: FloatArray) -> tuple[FloatArray, FloatArray]:
     (shared with the next call for the same polygon)."""
     hull = np.asarray(hull, dtype=float)
     key = hull.tobytes() + bytes(str(hull.shape), "ascii")
-    if _LAST_PLANES and _LAST_PLANES[0][0] == key:
-        return _LAST_PLANES[0][1], _LAST_PLANES[0][2]
+    last = _LAST_PLANES[0] if _LAST_PLANES else None  # one read: another thread may replace it
+    if last is not None and last[0] == key:
+        return last[1], last[2]
     edges = np.concatenate((hull[1:], hull[:1])) - hull
     normals = np.empty_like(edges)  # outward for a CCW polygon
     normals[:, 0] = edges[:, 1]
