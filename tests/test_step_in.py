@@ -14,10 +14,13 @@ from pathlib import Path
 import pytest
 from plan_fixtures import scenario_from_text
 
+from locoplan.log.reader import read_log
 from locoplan.plan import PlanError, compile_plan
 from locoplan.plan.compiler import STEP_IN_CYCLES, STEP_IN_MIN
-from locoplan.plan.payload import check_lift, pick_lift_margin
+from locoplan.plan.payload import check_grasp_reach, check_lift, pick_lift_margin
 from locoplan.plan.robot_geometry import HECTOR_GEOMETRY
+from locoplan.scenario import load_scenario
+from locoplan.sim.run import RunOptions, run_scenario
 
 HOLD_11KG = Path(__file__).resolve().parent / "data" / "envelope" / "hold-11kg.yaml"
 # The lift's refusal from where the robot stands (measured by `check_lift`, static model).
@@ -176,3 +179,84 @@ def test_a_lift_without_the_planners_margin_steps_nearer_first() -> None:
     ]
     assert margins[0] is not None and margins[0].margin >= 0.0
     assert margins[1] is not None and margins[1].margin < 0.0
+
+
+def _far_block(x: float, mass: float, turn: bool = False) -> str:
+    """A standing hold of a light block centred `x` m ahead on a table (hold-11kg's block and
+    table moved out), put back; `turn`: a turn starts 0.1 s into the pick."""
+    turn_task = "  - {action: turn, angle: 30, start: 0.6, duration: 1.0}\n" if turn else ""
+    return f"""version: 1
+name: far-block
+objects:
+  block: {{shape: box, size: [0.211, 0.234, 0.169], mass: {mass}, position: [{x}, 0.0, 0.543]}}
+fixtures:
+  table: {{kind: table, position: [{x + 0.124:.3f}, 0.0, 0.0], size: [0.4, 0.6, 0.459]}}
+tasks:
+  - {{action: stand, start: 0.0, duration: 0.5}}
+  - {{action: pick, object: block, start: 0.5, duration: 2.0}}
+{turn_task}  - {{action: drop, object: block, onto: table, start: 5.5, duration: 1.5}}
+end: 8.0
+expect: {{no_fall: true, max_torque_ratio: 1.0, placed: {{block: table}}}}
+"""
+
+
+def test_a_standing_pick_out_of_reach_starts_with_the_shortest_step_that_reaches() -> None:
+    # Centred 0.45 m out, the 2 kg block's grip points are 0.05 m beyond the arms' reach from
+    # where the robot stands (0.04 m allowed): refused before the step, which the message
+    # advised ("walk up to it first"). Now the planner takes that step: the shortest that
+    # reaches and whose lift keeps the grasp tolerance to spare.
+    scenario = scenario_from_text(_far_block(0.45, 2.0))
+    plan = compile_plan(scenario)
+    walk = next(t for t in plan.tasks if t.action == "walk")
+    pick = next(t for t in plan.tasks if t.action == "pick")
+    assert walk.index == len(scenario.tasks) and walk.start == pytest.approx(0.5)
+    assert pick.start == pytest.approx(walk.end) and pick.end == pytest.approx(walk.end + 2.0)
+    step = walk.distance[0] if walk.distance else 0.0
+    assert walk.distance == (step, 0.0) and STEP_IN_MIN <= step <= 0.05
+    note = next(n for n in plan.notes if n.startswith("the pick of 'block' starts with a step"))
+    assert note.startswith(f"the pick of 'block' starts with a step {step:.2f} m nearer")
+    assert note.endswith("its grip points at the lift-off are beyond the arms' reach")
+    check_grasp_reach(plan, scenario.robot)  # the stepped plan reaches its grip
+    check_lift(plan, scenario.robot)
+
+
+def test_a_pick_out_of_reach_with_a_turn_in_the_steps_time_is_refused_saying_why() -> None:
+    with pytest.raises(PlanError) as info:
+        compile_plan(scenario_from_text(_far_block(0.45, 2.0, turn=True)))
+    message = info.value.message
+    assert message.startswith("infeasible (reach): at the lift-off of 'block'")
+    assert "; stepping nearer first does not mend it: turn (task 2) leaves no time" in message
+
+
+@pytest.mark.closed_loop
+def test_a_block_out_of_reach_is_stepped_to_lifted_and_put_back(tmp_path: Path) -> None:
+    # 4 kg centred 0.48 m out: the step (0.12 m: where the lift also keeps the grasp
+    # tolerance to spare) is followed by the grip, the lift and the hold; the block rests
+    # at 0.543 m and is held at least 4 cm up until the put-back (measured 7.4 cm).
+    loaded = load_scenario("<far>", _far_block(0.48, 4.0))
+    result = run_scenario(loaded, _far_block(0.48, 4.0), RunOptions(out_dir=tmp_path))
+    m = result.metrics
+    assert not m["fell"] and m["passed"], m["expectations"]
+    assert any("beyond the arms' reach" in n for n in m["planner_notes"])
+    assert result.log_path is not None
+    heights = [
+        e.cubes[0].pose.position.z
+        for t, msg in read_log(result.log_path).messages("/scene/objects")
+        if 3.5 <= t <= 5.0
+        for e in msg.entities
+        if e.id.startswith("object/block/")
+    ]
+    assert heights and min(heights) > 0.543 + 0.04
+
+
+def test_a_pick_further_out_of_reach_than_a_stride_is_refused_saying_so() -> None:
+    # Centred 0.70 m out the grip points are 0.28 m beyond reach: more than one step's stride.
+    with pytest.raises(PlanError) as info:
+        compile_plan(scenario_from_text(_far_block(0.70, 2.0)))
+    message = info.value.message
+    assert message.startswith("infeasible (reach): at the lift-off of 'block'")
+    stride = HECTOR_GEOMETRY.walk_stride
+    assert message.endswith(
+        "; stepping nearer first does not mend it: that takes a step of 0.25 m at least, "
+        f"more than the {stride:.2f} m the stride and the fixtures allow"
+    )

@@ -80,11 +80,13 @@ def compile_plan(
                 f"{t.action} ends at {t.end:g} s, after the simulation end {t_end:g} s", t.index
             )
 
-    plan = _compile_tasks(scenario, strategy, tasks, t_end, end_shift, geometry)
-
     def compile_stepped(stepped: tuple[PlannedTask, ...], note: str) -> Plan:
         return _compile_tasks(scenario, strategy, stepped, t_end, end_shift, geometry, (note,))
 
+    try:
+        plan = _compile_tasks(scenario, strategy, tasks, t_end, end_shift, geometry)
+    except InfeasiblePlanError as exc:
+        return _step_in_for_the_reach(scenario, tasks, t_end, exc, compile_stepped, geometry)
     try:
         check_lift(plan, scenario.robot)
     except InfeasiblePlanError as exc:
@@ -187,70 +189,24 @@ def _step_in_for_the_lift(
     pick = next((t for t in tasks if t.index == exc.task_index and t.action == "pick"), None)
     if pick is None:
         raise exc
-    start, end = pick.start, pick.start + STEP_IN_CYCLES * scenario.gait.period
-    later = replace(pick, start=end, end=pick.end + (end - start))
-    busy = next(
-        (
-            t
-            for t in tasks
-            if t is not pick and t.kind != "stand" and t.start < later.end and t.end > start
-        ),
-        None,
+    end = pick.start + STEP_IN_CYCLES * scenario.gait.period
+    held = any(
+        h.lift < end and h.release > pick.start for h in plan.holds if h.pick_task != pick.index
     )
-    if busy is not None:
-        raise _no_step(
-            exc,
-            f"{busy.action} (task {busy.index}) leaves no time for it before {later.end:.2f} s "
-            f"(the pick's {pick.duration:.2f} s after {end - start:.2f} s of stepping)",
-        )
-    if any(h.lift < end and h.release > start for h in plan.holds if h.pick_task != pick.index):
-        raise _no_step(exc, "another object is held then")
-    if later.end > plan.t_end + _END_TOLERANCE:
-        raise _no_step(
-            exc,
-            f"the pick would end at {later.end:.2f} s (after {end - start:.2f} s of stepping), "
-            f"after the run's end at {plan.t_end:.2f} s",
-        )
-    x, y, yaw, _, _, _ = plan.trunk.pose_at(start)
-    c, s = math.cos(yaw), math.sin(yaw)
-    obstacles = [fixture_obstacle(n, f) for n, f in scenario.fixtures.items()]
-
-    def clear(cm: int) -> bool:
-        d = cm / 100.0
-        foot = (x + c * d, y + s * d, 0.5 * geometry.footprint_radius)
-        return all(o.distance(foot, start) >= geometry.footprint_radius for o in obstacles)
-
-    index = 1 + max(t.index for t in tasks)
+    room = _step_room(
+        scenario, tasks, pick, held, plan.t_end, plan.trunk.pose_at(pick.start)[:3], geometry
+    )
+    if isinstance(room, str):
+        raise _no_step(exc, room)
+    low, high = room
+    stepped = _stepper(scenario, tasks, pick, compile_stepped, why)
     tol = geometry.grasp_tolerance
-
-    def stepped(cm: int) -> Plan:
-        """The plan stepping `cm` cm nearer (raises what its compile refuses)."""
-        walk = PlannedTask(
-            index=index,
-            action="walk",
-            start=start,
-            end=end,
-            distance=(cm / 100.0, 0.0),
-            angle=0.0,
-        )
-        note = (
-            f"the pick of '{pick.object}' starts with a step {cm / 100.0:.2f} m nearer, from "
-            f"{start:.2f} to {end:.2f} s: {why}"
-        )
-        planned = (*(later if t is pick else t for t in tasks), walk)
-        return compile_stepped(tuple(sorted(planned, key=lambda t: (t.start, t.index))), note)
 
     def margin(p: Plan, slack: float, cm: int = 0) -> float:
         """The lift margin of `p` (m), or had the robot stood `cm` cm nearer."""
         m = pick_lift_margin(p, scenario.robot, pick.index, slack=slack, nearer=cm / 100.0)
         return -math.inf if m is None else m.margin
 
-    low = math.ceil(STEP_IN_MIN * 100.0)
-    high = math.floor(geometry.walk_stride * 100.0 + 1e-9)
-    while high >= low and not clear(high):
-        high -= 1
-    if high < low:
-        raise _no_step(exc, "the fixtures in front leave no room for the feet")
     # The step from the grasp pose moved nearer (the arms' room at it: a few IK solves), then
     # compiled and checked, a centimetre longer at a time while the compiled grasp falls
     # short of the prediction. None short enough: the longest, if the check accepts it.
@@ -273,6 +229,195 @@ def _step_in_for_the_lift(
             raise
         most = ", the most the stride and the fixtures allow" if cm == high else ""
         raise _no_step(exc, f"even {cm / 100.0:.2f} m nearer{most}") from None
+    return best
+
+
+def _step_room(
+    scenario: Scenario,
+    tasks: tuple[PlannedTask, ...],
+    pick: PlannedTask,
+    held: bool,
+    t_end: float,
+    pose: tuple[float, float, float],
+    geometry: PlanGeometry,
+) -> tuple[int, int] | str:
+    """The shortest and longest step (cm) that fits before `pick` (`_step_in_for_the_lift`:
+    STEP_IN_CYCLES gait cycles from its start, no faster than the stride, the feet clear of
+    every fixture), the trunk at `pose` (x, y, yaw) then and another object `held` or not;
+    or why none does."""
+    start, end = pick.start, pick.start + STEP_IN_CYCLES * scenario.gait.period
+    later_end = pick.end + (end - start)
+    busy = next(
+        (
+            t
+            for t in tasks
+            if t is not pick and t.kind != "stand" and t.start < later_end and t.end > start
+        ),
+        None,
+    )
+    if busy is not None:
+        return (
+            f"{busy.action} (task {busy.index}) leaves no time for it before {later_end:.2f} s "
+            f"(the pick's {pick.duration:.2f} s after {end - start:.2f} s of stepping)"
+        )
+    if held:
+        return "another object is held then"
+    if later_end > t_end + _END_TOLERANCE:
+        return (
+            f"the pick would end at {later_end:.2f} s (after {end - start:.2f} s of stepping), "
+            f"after the run's end at {t_end:.2f} s"
+        )
+    x, y, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    obstacles = [fixture_obstacle(n, f) for n, f in scenario.fixtures.items()]
+
+    def clear(cm: int) -> bool:
+        d = cm / 100.0
+        foot = (x + c * d, y + s * d, 0.5 * geometry.footprint_radius)
+        return all(o.distance(foot, start) >= geometry.footprint_radius for o in obstacles)
+
+    low = math.ceil(STEP_IN_MIN * 100.0)
+    high = math.floor(geometry.walk_stride * 100.0 + 1e-9)
+    while high >= low and not clear(high):
+        high -= 1
+    if high < low:
+        return "the fixtures in front leave no room for the feet"
+    return low, high
+
+
+def _stepper(
+    scenario: Scenario,
+    tasks: tuple[PlannedTask, ...],
+    pick: PlannedTask,
+    compile_stepped: Callable[[tuple[PlannedTask, ...], str], Plan],
+    why: str,
+) -> Callable[[int], Plan]:
+    """The plan with `pick` starting with a step `cm` cm straight ahead (a walk of
+    STEP_IN_CYCLES gait cycles from the pick's start, the pick's written duration after it),
+    as a function of cm; it raises what the stepped plan's compile refuses."""
+    start, end = pick.start, pick.start + STEP_IN_CYCLES * scenario.gait.period
+    later = replace(pick, start=end, end=pick.end + (end - start))
+    index = 1 + max(t.index for t in tasks)
+
+    def stepped(cm: int) -> Plan:
+        walk = PlannedTask(
+            index=index,
+            action="walk",
+            start=start,
+            end=end,
+            distance=(cm / 100.0, 0.0),
+            angle=0.0,
+        )
+        note = (
+            f"the pick of '{pick.object}' starts with a step {cm / 100.0:.2f} m nearer, from "
+            f"{start:.2f} to {end:.2f} s: {why}"
+        )
+        planned = (*(later if t is pick else t for t in tasks), walk)
+        return compile_stepped(tuple(sorted(planned, key=lambda t: (t.start, t.index))), note)
+
+    return stepped
+
+
+def _step_in_for_the_reach(
+    scenario: Scenario,
+    tasks: tuple[PlannedTask, ...],
+    t_end: float,
+    exc: InfeasiblePlanError,
+    compile_stepped: Callable[[tuple[PlannedTask, ...], str], Plan],
+    geometry: PlanGeometry,
+) -> Plan:
+    """The plan with a step towards the object at the start of a standing pick whose grip
+    points lie beyond the arms' reach at its lift-off (`check_grasp_reach` refused it:
+    `exc`, raised again for any other refusal): the shortest step (to the centimetre, at
+    least STEP_IN_MIN, within the room of `_step_in_for_the_lift`) whose plan compiles and
+    whose lift `check_lift` accepts, or the shortest that also keeps the lift's margin with
+    the grasp tolerance to spare (`_step_in_for_the_lift`'s target) if one does within the
+    stride. The message says "walk up to it first"; a standing pick is the planner's to
+    place. Only for a pick during which no other task but stands runs and nothing else is
+    held; raises `exc` saying why no step mends it otherwise.
+
+    Why: H1 envelope seed 77027 (fresh), standing-hold-003, a 6.7 kg block centred 0.50 m
+    out on a 0.925 m table: its grip points were 6.1 cm beyond the arms' reach against the
+    5 cm the hands' closing tolerance allows, and the script was refused inside the
+    envelope. The compile itself refuses it, so the step is chosen from the scenario's own
+    trunk path (`build_trunk_path`), not from a plan."""
+    if not exc.message.startswith("infeasible (reach): at the lift-off"):
+        raise exc
+    pick = next((t for t in tasks if t.index == exc.task_index and t.action == "pick"), None)
+    if pick is None:
+        raise exc
+    end = pick.start + STEP_IN_CYCLES * scenario.gait.period
+    # Another object in the hands then: picked before the step ends, released after it starts.
+    released = {t.object: t.end for t in tasks if t.action in ("drop", "throw")}
+    held = any(
+        t.action == "pick"
+        and t is not pick
+        and t.start < end
+        and released.get(t.object, math.inf) > pick.start
+        for t in tasks
+    )
+    start = scenario.robot_start
+    trunk = build_trunk_path(
+        tasks, start.position[0], start.position[1], math.radians(start.yaw), geometry.base_height
+    )
+    room = _step_room(scenario, tasks, pick, held, t_end, trunk.pose_at(pick.start)[:3], geometry)
+    if isinstance(room, str):
+        raise _no_step(exc, room)
+    low, high = room
+    why = "from where the robot stands its grip points at the lift-off are beyond the arms' reach"
+    stepped = _stepper(scenario, tasks, pick, compile_stepped, why)
+    tol = geometry.grasp_tolerance
+
+    refusals: list[str] = []
+
+    def accepted(cm: int) -> Plan | None:
+        """The plan stepping `cm` cm nearer if it compiles and its lifts balance, else None
+        (what refused it kept in `refusals`)."""
+        try:
+            candidate = stepped(cm)
+            check_lift(candidate, scenario.robot)
+        except InfeasiblePlanError as again:
+            refusals.append(again.message)
+            return None
+        return candidate
+
+    def margin(p: Plan, cm: int = 0) -> float:
+        """The lift margin of `p` with the tolerance to spare (m), had it stood `cm` cm nearer."""
+        m = pick_lift_margin(p, scenario.robot, pick.index, slack=-tol, nearer=cm / 100.0)
+        return math.inf if m is None else m.margin
+
+    # The shortest step that reaches: from the refusal's miss (a step straight ahead brings
+    # grip points ahead of the trunk in by about its length), a centimetre longer at a time
+    # (each try a compile, a second or more).
+    first = max(low, math.ceil((exc.excess or 0.0) * 100.0 - 1e-9))
+    if first > high:
+        raise _no_step(
+            exc,
+            f"that takes a step of {first / 100.0:.2f} m at least, more than the "
+            f"{high / 100.0:.2f} m the stride and the fixtures allow",
+        )
+    best = None
+    for hi in range(first, high + 1):
+        best = accepted(hi)
+        if best is not None:
+            break
+    if best is None:
+        raise _no_step(
+            exc,
+            f"even {high / 100.0:.2f} m nearer, the most the stride and the fixtures allow: "
+            + refusals[-1],
+        )
+    if margin(best) >= 0.0:
+        return best
+    # Then, as for a lift (`_step_in_for_the_lift`), the lift's margin with the grasp tolerance
+    # to spare where a longer step within the room gives it (predicted from the arms' room,
+    # then compiled and checked).
+    ahead = next((cm for cm in range(hi + 1, high + 1) if margin(best, cm - hi) >= 0.0), None)
+    if ahead is not None:
+        for cm in range(ahead, high + 1):
+            plan = accepted(cm)
+            if plan is not None and margin(plan) >= 0.0:
+                return plan
     return best
 
 

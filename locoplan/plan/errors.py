@@ -36,7 +36,10 @@ class PlanError(LocoplanError):
 class InfeasiblePlanError(PlanError):
     """A plan the robot cannot carry out, found without simulating (`locoplan.plan.payload`):
     the message starts `infeasible (<reason>):` as the scenario's feasibility findings do,
-    and `loc` names the task to blame."""
+    and `loc` names the task to blame. `excess` (m), where set: how far past its limit the
+    measured value lies (a reach refusal's grip points beyond the allowed miss)."""
+
+    excess: float | None = None
 
 
 def plan_error_message(exc: PlanError, source: str, text: str) -> str:
