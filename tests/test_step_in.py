@@ -233,8 +233,8 @@ def test_a_block_out_of_reach_is_stepped_to_lifted_and_put_back(tmp_path: Path) 
     # 4 kg centred 0.48 m out: the step (0.12 m: where the lift also keeps the grasp
     # tolerance to spare) is followed by the grip, the lift and the hold; the block rests
     # at 0.543 m and is held at least 4 cm up until the put-back (measured 7.4 cm).
-    loaded = load_scenario("<far>", _far_block(0.48, 4.0))
-    result = run_scenario(loaded, _far_block(0.48, 4.0), RunOptions(out_dir=tmp_path))
+    text = _far_block(0.48, 4.0)
+    result = run_scenario(load_scenario("<far>", text), text, RunOptions(out_dir=tmp_path))
     m = result.metrics
     assert not m["fell"] and m["passed"], m["expectations"]
     assert any("beyond the arms' reach" in n for n in m["planner_notes"])

@@ -29,7 +29,7 @@ from locoplan.plan.plan import Plan
 from locoplan.plan.profiles import CRUISE_RAMP
 from locoplan.plan.robot_geometry import HECTOR_GEOMETRY, PlanGeometry
 from locoplan.plan.tasks import PlannedTask, plan_tasks, retime_quasi_static
-from locoplan.plan.trunk import build_trunk_path
+from locoplan.plan.trunk import TrunkPath, build_trunk_path
 from locoplan.scenario.model import Scenario
 
 STRATEGIES = ("dynamic", "quasi-static")
@@ -359,10 +359,7 @@ def _step_in_for_the_reach(
         and released.get(t.object, math.inf) > pick.start
         for t in tasks
     )
-    start = scenario.robot_start
-    trunk = build_trunk_path(
-        tasks, start.position[0], start.position[1], math.radians(start.yaw), geometry.base_height
-    )
+    trunk = _trunk_path(scenario, tasks, geometry)
     room = _step_room(scenario, tasks, pick, held, t_end, trunk.pose_at(pick.start)[:3], geometry)
     if isinstance(room, str):
         raise _no_step(exc, room)
@@ -422,6 +419,17 @@ def _step_in_for_the_reach(
             if plan is not None and margin(plan) >= 0.0:
                 return plan
     return best
+
+
+def _trunk_path(
+    scenario: Scenario, tasks: tuple[PlannedTask, ...], geometry: PlanGeometry
+) -> TrunkPath:
+    """The planned trunk path of `tasks` from the script's start pose (what `_assemble`
+    plans, and where `_step_in_for_the_reach` steps from)."""
+    start = scenario.robot_start
+    return build_trunk_path(
+        tasks, start.position[0], start.position[1], math.radians(start.yaw), geometry.base_height
+    )
 
 
 def _no_step(exc: InfeasiblePlanError, why: str) -> InfeasiblePlanError:
@@ -540,10 +548,7 @@ def _assemble(
     contacts = build_contact_schedule(
         tasks, scenario.gait.period, scenario.gait.swing, geometry.settle_time
     )
-    start = scenario.robot_start
-    trunk = build_trunk_path(
-        tasks, start.position[0], start.position[1], math.radians(start.yaw), geometry.base_height
-    )
+    trunk = _trunk_path(scenario, tasks, geometry)
     footholds = build_footholds(contacts, trunk, geometry.foot_width)
     swings = tuple(iv for f in range(2) for iv in contacts.swing_intervals(f))
     # Only a plan that holds something needs the robot's statics (the payload check loads
