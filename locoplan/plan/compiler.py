@@ -189,7 +189,7 @@ def _step_in_for_the_lift(
     pick = next((t for t in tasks if t.index == exc.task_index and t.action == "pick"), None)
     if pick is None:
         raise exc
-    end = pick.start + STEP_IN_CYCLES * scenario.gait.period
+    end = _step_end(scenario, pick)
     held = any(
         h.lift < end and h.release > pick.start for h in plan.holds if h.pick_task != pick.index
     )
@@ -232,6 +232,12 @@ def _step_in_for_the_lift(
     return best
 
 
+def _step_end(scenario: Scenario, pick: PlannedTask) -> float:
+    """When (s) a step nearer before `pick` ends and the pick then starts: STEP_IN_CYCLES
+    gait cycles after the pick's written start."""
+    return pick.start + STEP_IN_CYCLES * scenario.gait.period
+
+
 def _step_room(
     scenario: Scenario,
     tasks: tuple[PlannedTask, ...],
@@ -245,7 +251,7 @@ def _step_room(
     STEP_IN_CYCLES gait cycles from its start, no faster than the stride, the feet clear of
     every fixture), the trunk at `pose` (x, y, yaw) then and another object `held` or not;
     or why none does."""
-    start, end = pick.start, pick.start + STEP_IN_CYCLES * scenario.gait.period
+    start, end = pick.start, _step_end(scenario, pick)
     later_end = pick.end + (end - start)
     busy = next(
         (
@@ -295,7 +301,7 @@ def _stepper(
     """The plan with `pick` starting with a step `cm` cm straight ahead (a walk of
     STEP_IN_CYCLES gait cycles from the pick's start, the pick's written duration after it),
     as a function of cm; it raises what the stepped plan's compile refuses."""
-    start, end = pick.start, pick.start + STEP_IN_CYCLES * scenario.gait.period
+    start, end = pick.start, _step_end(scenario, pick)
     later = replace(pick, start=end, end=pick.end + (end - start))
     index = 1 + max(t.index for t in tasks)
 
@@ -349,7 +355,7 @@ def _step_in_for_the_reach(
     pick = next((t for t in tasks if t.index == exc.task_index and t.action == "pick"), None)
     if pick is None:
         raise exc
-    end = pick.start + STEP_IN_CYCLES * scenario.gait.period
+    end = _step_end(scenario, pick)
     # Another object in the hands then: picked before the step ends, released after it starts.
     released = {t.object: t.end for t in tasks if t.action in ("drop", "throw")}
     held = any(
