@@ -469,8 +469,16 @@ def pre_lean_room(model: StaticModel, pose: HeldPose) -> float:
     ux, uy = mx / norm, my / norm
 
     def reaches(b: float) -> bool:
-        moved = tuple((p[0] + b * ux, p[1] + b * uy, p[2]) for p in pose.p_hands_trunk)
-        return model.postures.arms(replace(pose, p_hands_trunk=moved))[2] >= 0.0
+        moved = replace(
+            pose,
+            p_hands_trunk=tuple((p[0] + b * ux, p[1] + b * uy, p[2]) for p in pose.p_hands_trunk),
+        )
+        # A point beyond the arm's longest reach gives a negative margin whatever the inverse
+        # kinematics finds (`StaticPostures.arms`), and finding it there is the slow case (its
+        # small-step retry): the bisection below probes such points half the time.
+        if model.postures.reach_shortfall(moved) > 0.0:
+            return False
+        return model.postures.arms(moved)[2] >= 0.0
 
     if not reaches(0.0):
         return 0.0
