@@ -45,11 +45,12 @@ lint: install
 types: install
 	$(BIN)/mypy locoplan
 
-# numba's kernels, compiled once into their cache (about 45 s of one core in a fresh clone, a
-# few seconds when cached): otherwise every test process and every subprocess that starts
-# before the cache is written compiles them itself (~40 s of CPU each). warm_up's 22 only
+# numba's kernels (the controller's, and the planner's clearance check), compiled once into
+# their cache (about 50 s of one core in a fresh clone, a few seconds when cached): otherwise
+# every test process and every subprocess that starts before the cache is written compiles
+# them itself (~40 s of CPU each). warm_up's 22 only
 # sizes the arrays; the kernels are compiled for their types.
-WARM_UP := $(BIN)/python -c "import locoplan.sim.run; from locoplan.control import mpc_kernels, wbc_kernels; mpc_kernels.warm_up(); wbc_kernels.warm_up(22)"
+WARM_UP := $(BIN)/python -c "import locoplan.sim.run; from locoplan.control import mpc_kernels, wbc_kernels; from locoplan.plan import clearance_kernels; mpc_kernels.warm_up(); wbc_kernels.warm_up(22); clearance_kernels.warm_up()"
 
 warmup: install
 	$(WARM_UP)

@@ -23,8 +23,8 @@ import tempfile
 from pathlib import Path
 
 CACHE_ENV = "NUMBA_CACHE_DIR"
-# Package folders that hold `cache=True` kernels (control/, log/, sim/).
-_KERNEL_DIRS = ("control", "log", "sim")
+# Package folders that hold `cache=True` kernels (control/, log/, plan/, sim/).
+_KERNEL_DIRS = ("control", "log", "plan", "sim")
 
 
 def _writable(directory: Path) -> bool:

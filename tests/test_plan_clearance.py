@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -237,3 +241,32 @@ def test_drop_on_a_belt_opens_the_downstream_hand_wider() -> None:
     extra = 0.2 * (drop.end - hold.release)  # belt speed x time from the release to the end
     assert gap_left == pytest.approx(k.GRASP_CLEARANCE + extra, abs=EXACT)
     assert np.isfinite(gap_left)
+
+
+def test_the_warm_up_covers_the_planners_kernel_signatures() -> None:
+    """`make warmup` compiles the clearance kernels once before the tests' processes start
+    (`clearance_kernels.warm_up`): it must cover the exact argument types (layout, read-only
+    flags) a plan's hand-path search passes, or every process would compile them again. In a
+    fresh process: the warm-up, then a plan with picks and drops; no kernel gains a
+    signature."""
+    code = """
+import json
+from locoplan.plan import clearance_kernels as kn
+from locoplan.plan import compile_plan
+from locoplan.scenario import load_scenario_file
+names = ("track_points", "distances", "sample_gaps")
+kn.warm_up()
+before = [len(getattr(kn, n).signatures) for n in names]
+compile_plan(load_scenario_file("scenarios/package-transfer.yaml").scenario)
+after = [len(getattr(kn, n).signatures) for n in names]
+print(json.dumps({"before": before, "after": after}))
+"""
+    root = Path(__file__).resolve().parents[1]
+    res = subprocess.run(
+        [sys.executable, "-c", code], cwd=root, capture_output=True, text=True, timeout=300,
+        check=False,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    counts = json.loads(res.stdout.strip().splitlines()[-1])
+    assert counts["before"] == [1, 1, 1], counts
+    assert counts["after"] == counts["before"]

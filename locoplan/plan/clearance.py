@@ -22,10 +22,10 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
+from locoplan.plan import clearance_kernels as kernels
 from locoplan.plan import constants as k
 from locoplan.plan.geometry import half_extents
 from locoplan.plan.hands import BasePose, HandTrack, HandWaypoint, Vec3
-from locoplan.plan.profiles import hermite_array
 from locoplan.plan.trunk import TrunkPath
 from locoplan.scenario.model import FixtureSpec, ObjectSpec
 
@@ -65,20 +65,30 @@ class Obstacle:
         return outside + min(max(qx, qy, qz), 0.0)
 
     def distances(self, p: FloatArray, t: FloatArray) -> FloatArray:
-        """`distance` of the points p (n, 3) at the times t (n,), vectorised."""
-        dt = np.maximum(0.0, t - self.t_ref)
-        dx = p[:, 0] - self.center[0] - self.drift[0] * dt
-        dy = p[:, 1] - self.center[1] - self.drift[1] * dt
-        dz = p[:, 2] - self.center[2]
-        if self.sphere:
-            return np.sqrt(dx * dx + dy * dy + dz * dz) - self.half[0]
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        qx = np.abs(c * dx + s * dy) - self.half[0]
-        qy = np.abs(-s * dx + c * dy) - self.half[1]
-        qz = np.abs(dz) - self.half[2]
-        ox, oy, oz = np.maximum(qx, 0.0), np.maximum(qy, 0.0), np.maximum(qz, 0.0)
-        outside = np.sqrt(ox * ox + oy * oy + oz * oz)
-        return outside + np.minimum(np.maximum(np.maximum(qx, qy), qz), 0.0)
+        """`distance` of the points p (n, 3) at the times t (n,), vectorised (compiled:
+        `clearance_kernels.distances`)."""
+        table, spheres = _obstacle_table((self,))
+        return kernels.distances(
+            table[0], bool(spheres[0]), np.ascontiguousarray(p, dtype=float),
+            np.ascontiguousarray(t, dtype=float),
+        )  # fmt: skip
+
+
+@functools.lru_cache(maxsize=256)
+def _obstacle_table(obstacles: tuple[Obstacle, ...]) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
+    """The obstacles as `clearance_kernels` rows (k, 11) and sphere flags (k,); cached (a
+    search checks every candidate path against the same obstacles), read-only."""
+    table = np.array(
+        [
+            (*ob.center, *ob.half, math.cos(ob.yaw), math.sin(ob.yaw), *ob.drift, ob.t_ref)
+            for ob in obstacles
+        ],
+        dtype=float,
+    ).reshape(len(obstacles), kernels.OBSTACLE_COLUMNS)
+    spheres = np.array([ob.sphere for ob in obstacles], dtype=np.bool_)
+    table.flags.writeable = False
+    spheres.flags.writeable = False
+    return table, spheres
 
 
 def object_obstacle(
@@ -160,8 +170,8 @@ def track_clearance(
     expected yaw error, see the module docstring). The hand point moves at most about 2 m/s, so 10
     ms samples miss at most 2 cm of a path that grazes an edge; thresholds are chosen with that in
     mind. `threshold` (m) is one for every obstacle or one per obstacle (in the order of
-    `obstacles`). Every sample is evaluated at once with numpy
-    (`track_positions`, `trunk_poses`, `Obstacle.distances`): a search checks thousands of
+    `obstacles`). Every sample is evaluated at once (`trunk_poses` with numpy, the hand and
+    the obstacles' distances compiled: `clearance_kernels`): a search checks thousands of
     candidate paths (H1 envelope seed 48027, transfer-004: 4368), which one sample at a time
     took 60 s for one plan."""
     if not obstacles or t1 < t0:
@@ -170,15 +180,10 @@ def track_clearance(
         threshold if isinstance(threshold, tuple) else (threshold,) * len(obstacles), dtype=float
     )
     smp = _trunk_samples(trunk, t0, t1, yaw_offsets, dt)
-    ts, m, t_all = smp.ts, smp.m, smp.t_turned
+    ts, m = smp.ts, smp.m
     p_all = track_positions(track, smp.t_poses, smp.x, smp.y, smp.z, smp.c, smp.s)
-    size = ts.size
-    drift = np.sqrt(np.sum((p_all[:size] - p_all[size : 2 * size]) ** 2, axis=1))
-    gaps = np.empty((size, m, len(obstacles)))
-    turned_all = p_all[2 * size :]
-    for o, ob in enumerate(obstacles):
-        d = ob.distances(turned_all, t_all).reshape(m, size).T
-        gaps[:, :, o] = d - hand_radius - drift[:, None]
+    table, spheres = _obstacle_table(obstacles)
+    gaps = kernels.sample_gaps(p_all, ts, m, table, spheres, hand_radius)
     flat = gaps.reshape(ts.size, -1)
     sample_min = flat.min(axis=1)
     nearest = gaps.min(axis=(0, 1))
@@ -269,32 +274,6 @@ def _waypoint_table(ws: list[HandWaypoint]) -> FloatArray:
     return np.array([(*w.point, *w.velocity, 1.0 if w.frame == "trunk" else 0.0) for w in ws])
 
 
-def _world_points(
-    rows: FloatArray,
-    bx: FloatArray,
-    by: FloatArray,
-    bz: FloatArray,
-    c: FloatArray,
-    s: FloatArray,
-) -> tuple[FloatArray, FloatArray]:
-    """World points (n, 3) and velocities in world axes (n, 3) of the waypoint rows (n, 7)
-    with the trunk at (bx, by, bz) yawed by (c, s) = (cos, sin) per row, as
-    `locoplan.plan.hands` maps one waypoint."""
-    px, py, pz = rows[:, 0], rows[:, 1], rows[:, 2]
-    ux, uy, uz = rows[:, 3], rows[:, 4], rows[:, 5]
-    trunk = rows[:, 6] > 0.5
-    rx = c * px - s * py
-    ry = s * px + c * py
-    point = np.stack(
-        (np.where(trunk, bx + rx, px), np.where(trunk, by + ry, py), np.where(trunk, bz + pz, pz)),
-        axis=1,
-    )
-    vel = np.stack(
-        (np.where(trunk, c * ux - s * uy, ux), np.where(trunk, s * ux + c * uy, uy), uz), axis=1
-    )
-    return point, vel
-
-
 def track_positions(
     track: HandTrack,
     ts: FloatArray,
@@ -307,22 +286,19 @@ def track_positions(
     """`HandTrack.evaluate`'s positions (n, 3) at the times ts (n,) with the trunk at (bx, by,
     bz) yawed by (c, s) = (cos, sin) at each, vectorised, each computed as `evaluate`
     computes it."""
+    seg_times, starts, rest = _track_tables(track)
+    return kernels.track_points(seg_times, starts, rest, ts, bx, by, bz, c, s)
+
+
+@functools.lru_cache(maxsize=256)
+def _track_tables(track: HandTrack) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """`clearance_kernels.track_points`' tables of a track: each segment's (t0, t1) (k, 2),
+    its start waypoint row (k, 7), and the initial waypoint then each segment's end (k + 1,
+    7); cached (HandTrack hashes by identity), read-only."""
     segs = track.segments
+    seg_times = np.array([(g.t0, g.t1) for g in segs], dtype=float).reshape(len(segs), 2)
+    starts = _waypoint_table([g.start for g in segs]).reshape(len(segs), 7)
     rest = _waypoint_table([track.initial, *(g.end for g in segs)])
-    if not segs:
-        return _world_points(rest[np.zeros(ts.size, dtype=int)], bx, by, bz, c, s)[0]
-    times = np.array([(g.t0, g.t1) for g in segs])
-    i = np.searchsorted(times[:, 0], ts, side="right") - 1
-    k_ = np.maximum(i, 0)
-    moving = (i >= 0) & (ts < times[k_, 1])
-    held, _ = _world_points(rest[i + 1], bx, by, bz, c, s)
-    starts = _waypoint_table([g.start for g in segs])[k_]
-    ends = rest[k_ + 1]
-    p0, u0 = _world_points(starts, bx, by, bz, c, s)
-    p1, u1 = _world_points(ends, bx, by, bz, c, s)
-    T = times[k_, 1] - times[k_, 0]
-    tau = np.where(moving, (ts - times[k_, 0]) / np.where(moving, T, 1.0), 0.0)
-    blend, g0, g1 = hermite_array(tau)
-    r = 1.0 - blend
-    pos = r[:, None] * p0 + blend[:, None] * p1 + T[:, None] * (g0[:, None] * u0 + g1[:, None] * u1)
-    return np.where(moving[:, None], pos, held)
+    for a in (seg_times, starts, rest):
+        a.flags.writeable = False
+    return seg_times, starts, rest

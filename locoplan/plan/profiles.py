@@ -63,18 +63,6 @@ def hermite(tau: float) -> tuple[float, float, float, float, float, float]:
     return s, ds, g0, dg0, g1, dg1
 
 
-def hermite_array(tau: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Vectorised `hermite`, the position part: arrays of s, g0 and g1 with the shape of
-    `tau` (clipped to [0, 1]), each computed as `hermite` computes it."""
-    p = np.clip(tau, 0.0, 1.0)
-    p2 = p * p
-    p3 = p2 * p
-    s = p3 * (10.0 - 15.0 * p + 6.0 * p2)
-    g0 = p - 6.0 * p3 + 8.0 * p3 * p - 3.0 * p3 * p2
-    g1 = -4.0 * p3 + 7.0 * p3 * p - 3.0 * p3 * p2
-    return s, g0, g1
-
-
 def hermite_second(tau: float) -> tuple[float, float, float]:
     """Second derivatives with respect to tau of `hermite`'s s, g0 and g1 at tau (clipped to
     [0, 1]): (d2s, d2g0, d2g1). All three are zero at both ends."""

@@ -132,6 +132,10 @@ class StancePostures:
         # Each arm's first joint with the trunk at the origin (`arms`' frame).
         self._shoulder_points = [np.array(data.oMi[j].translation) for j in self._shoulders]
         self._legs_cache: dict[tuple[float, float], tuple[FloatArray, float]] = {}
+        self._arms_cache: dict[
+            tuple[tuple[int, ...], tuple[tuple[float, ...], ...]],
+            tuple[FloatArray, tuple[float, ...], float],
+        ] = {}
         self._leg_reach: dict[float, float] = {}
 
     def _longest_reach(self, hand: int) -> float:
@@ -231,7 +235,22 @@ class StancePostures:
     def arms(self, pose: HeldPose) -> tuple[FloatArray, tuple[float, ...], float]:
         """Arm joint angles (in q (nq,), trunk at the origin) for the pose's hand points, each
         hand's residual (m) and the reach margin (m): the smallest of max_reach minus the
-        shoulder-to-target distance, or minus the residual of a target out of reach."""
+        shoulder-to-target distance, or minus the residual of a target out of reach.
+
+        Cached by the hand points (the solve starts from the nominal arms whatever the trunk's
+        height): the planner asks for the same points again as it tries a pick's step nearer
+        or a later start, and a point out of reach costs a few hundred small steps."""
+        key = (pose.hands, tuple(tuple(float(c) for c in p) for p in pose.p_hands_trunk))
+        hit = self._arms_cache.get(key)
+        if hit is None:
+            hit = self._solve_arms(pose)
+            if len(self._arms_cache) > 4096:
+                self._arms_cache.clear()
+            self._arms_cache[key] = hit
+        return hit[0].copy(), hit[1], hit[2]
+
+    def _solve_arms(self, pose: HeldPose) -> tuple[FloatArray, tuple[float, ...], float]:
+        """`arms` without its cache."""
         q = self.q_nominal.copy()
         q[:3] = 0.0
         goals = [
