@@ -17,7 +17,7 @@ from locoplan._numba_cache import CACHE_ENV, choose_cache_dir, configure, user_c
 @pytest.fixture
 def package(tmp_path: Path) -> Path:
     root = tmp_path / "locoplan"
-    for name in ("control", "log", "sim"):
+    for name in _numba_cache._KERNEL_DIRS:
         (root / name).mkdir(parents=True)
     return root
 

@@ -12,7 +12,6 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
 from plan_fixtures import hold_script, scenario_files, scenario_from_text
 from typer.testing import CliRunner
@@ -694,20 +693,26 @@ def test_a_fixture_far_away_is_refused_not_planned_forever(
     assert message in res.stdout
 
 
-def test_clearance_check_samples_a_long_segment_at_most_max_times() -> None:
+def test_clearance_check_samples_a_long_segment_at_most_max_times(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from locoplan.plan import clearance_kernels
     from locoplan.plan import constants as k
-    from locoplan.plan.clearance import FloatArray, Obstacle, track_clearance
+    from locoplan.plan.clearance import Obstacle, track_clearance
 
     plan = compile_plan(load_scenario(PACKAGE_TRANSFER))
     calls: list[float] = []
+    gaps = clearance_kernels.sample_gaps
 
-    class Counting(Obstacle):
-        def distances(self, p: FloatArray, t: FloatArray) -> FloatArray:
-            calls.extend(t.tolist())
-            return np.ones(len(t))
+    def counting(points: Any, ts: Any, *args: Any) -> Any:
+        calls.extend(ts.tolist())
+        return gaps(points, ts, *args)
 
-    wall = Counting("wall", (5.0, 0.0, 0.5), (0.1, 0.1, 0.5), 0.0)
+    monkeypatch.setattr(clearance_kernels, "sample_gaps", counting)
+    wall = Obstacle("wall", (5.0, 0.0, 0.5), (0.1, 0.1, 0.5), 0.0)
     track = plan.manipulation.tracks[0]
     c = track_clearance(track, plan.trunk, (wall,), 0.0, 1.0e7, 0.025, yaw_offsets=(0.0,))
     assert len(calls) == k.MAX_CLEARANCE_SAMPLES + 1
-    assert calls[0] == 1.0e7 and c.minimum < 1.0
+    # The latest sample first; the hand stays within a metre of the start, the wall's face
+    # 4.9 m ahead.
+    assert calls[0] == 1.0e7 and 3.0 < c.minimum < 4.9
