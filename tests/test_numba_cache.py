@@ -6,12 +6,27 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from locoplan import _numba_cache
 from locoplan._numba_cache import CACHE_ENV, choose_cache_dir, configure, user_cache_dir
+
+
+@pytest.fixture(autouse=True)
+def _restore_cache_env() -> Iterator[None]:
+    """Put NUMBA_CACHE_DIR back as it was: `configure` sets it in this process, and
+    monkeypatch's delenv of a variable that was not set records nothing to undo. Left set, it
+    sent every later subprocess of the pytest-xdist worker to a fresh, empty cache, and the
+    first of them compiled every kernel again (50-60 s of one core in each suite run)."""
+    before = os.environ.get(CACHE_ENV)
+    yield
+    if before is None:
+        os.environ.pop(CACHE_ENV, None)
+    else:
+        os.environ[CACHE_ENV] = before
 
 
 @pytest.fixture
