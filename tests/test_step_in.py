@@ -17,9 +17,15 @@ from plan_fixtures import scenario_from_text
 from locoplan.log.reader import read_log
 from locoplan.plan import PlanError, compile_plan
 from locoplan.plan.compiler import STEP_IN_CYCLES, STEP_IN_MIN
-from locoplan.plan.payload import check_grasp_reach, check_lift, pick_lift_margin
+from locoplan.plan.payload import (
+    check_grasp_reach,
+    check_lift,
+    check_place_reach,
+    pick_lift_margin,
+)
 from locoplan.plan.robot_geometry import HECTOR_GEOMETRY
 from locoplan.scenario import load_scenario
+from locoplan.sim.robot_plan import compile_robot_plan
 from locoplan.sim.run import RunOptions, run_scenario
 
 HOLD_11KG = Path(__file__).resolve().parent / "data" / "envelope" / "hold-11kg.yaml"
@@ -260,3 +266,69 @@ def test_a_pick_further_out_of_reach_than_a_stride_is_refused_saying_so() -> Non
         "; stepping nearer first does not mend it: that takes a step of 0.25 m at least, "
         f"more than the {stride:.2f} m the stride and the fixtures allow"
     )
+
+
+# H1 envelope seed 1, standing-hold-136: the block overhangs its table's edge by 2.1 cm where
+# it is picked; "onto: table" puts it back at the fully supported point nearest the robot,
+# 4.5 cm deeper, and its place points are 5.9 cm beyond reach (5 cm allowed).
+PUT_BACK = """version: 1
+name: put-back-deeper
+robot: h1
+gait: {{period: 0.43, swing: 0.17}}
+objects:
+  block: {{shape: box, size: [0.152, 0.115, 0.102], mass: 5.43, position: [0.46, 0.0, 0.987]}}
+fixtures:
+  table: {{kind: table, position: [0.657, 0.0, 0.0], size: [0.504, 0.317, 0.936]}}
+tasks:
+  - {{action: stand, start: 0.0, duration: 0.5}}
+  - {{action: pick, object: block, start: 0.5, duration: 1.28}}
+  - {{action: stand, start: 1.78, duration: {hold}}}
+  - {{action: drop, object: block, onto: table, start: {drop}, duration: 1.01}}
+end: {end}
+expect: {{no_fall: true, max_torque_ratio: 1.0, placed: {{block: table}}}}
+"""
+
+
+def _put_back(hold: float = 3.54) -> str:
+    drop = 1.78 + hold
+    return PUT_BACK.format(hold=hold, drop=f"{drop:.2f}", end=f"{drop + 2.01:.2f}")
+
+
+def test_a_put_back_out_of_reach_comes_after_the_shortest_step_that_reaches() -> None:
+    scenario = scenario_from_text(_put_back())
+    plan = compile_robot_plan(scenario, "dynamic")
+    walk = next(t for t in plan.tasks if t.action == "walk")
+    drop = next(t for t in plan.tasks if t.action == "drop")
+    # The drop keeps its written times; the step fills the two gait cycles before it.
+    assert (drop.start, drop.end) == pytest.approx((5.32, 6.33))
+    assert walk.index == len(scenario.tasks)
+    assert (walk.start, walk.end) == pytest.approx((5.32 - STEP_IN_CYCLES * 0.43, 5.32))
+    assert walk.distance == (STEP_IN_MIN, 0.0) and walk.angle == 0.0
+    note = next(n for n in plan.notes if n.startswith("the drop of 'block' onto 'table'"))
+    assert note.startswith(f"the drop of 'block' onto 'table' comes after a step {STEP_IN_MIN:.2f}")
+    assert note.endswith("its place points at the release are beyond the arms' reach")
+    check_place_reach(plan, scenario.robot, scenario.fixtures)  # the stepped plan reaches
+
+
+def test_a_put_back_out_of_reach_too_soon_after_its_pick_is_refused_saying_why() -> None:
+    # Dropped 0.42 s after the pick ends: its two cycles of stepping would start in the pick.
+    with pytest.raises(PlanError) as info:
+        compile_robot_plan(scenario_from_text(_put_back(hold=0.42)), "dynamic")
+    message = info.value.message
+    assert message.startswith("infeasible (reach): at the release of 'block' onto 'table'")
+    assert message.endswith(
+        "; stepping nearer first does not mend it: pick (task 1) leaves no time for it from "
+        "1.34 to 2.20 s"
+    )
+
+
+@pytest.mark.closed_loop
+def test_a_put_back_out_of_reach_is_stepped_to_and_placed(tmp_path: Path) -> None:
+    # Measured in both strategies: placed on the table, no fall, peak torque ratio 0.81.
+    text = _put_back()
+    result = run_scenario(load_scenario("<put-back>", text), text, RunOptions(out_dir=tmp_path))
+    m = result.metrics
+    assert not m["fell"] and m["passed"], m["expectations"]
+    assert m["objects"]["block"]["on"] == "table"
+    assert any(n.startswith("the drop of 'block' onto 'table' comes after") for n in
+               m["planner_notes"])  # fmt: skip

@@ -755,7 +755,7 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
         if residual <= allowed:
             continue
         ahead = max(math.hypot(p[0], p[1]) for p in pose.p_hands_trunk)
-        raise InfeasiblePlanError(
+        err = InfeasiblePlanError(
             f"infeasible (reach): at the release of '{hold.object}' onto '{task.onto}' "
             f"({t:.2f} s) the hands' points are {residual:.3f} m beyond the arms' reach from "
             f"the planned trunk pose (up to {ahead:.2f} m from the trunk's axis; allowed "
@@ -765,6 +765,8 @@ def check_place_reach(plan: Plan, robot: str, fixtures: Mapping[str, FixtureSpec
             hold.release_task,
             loc=("tasks", hold.release_task),
         )
+        err.excess = residual - allowed
+        raise err
 
 
 def _inside_top(fixture: FixtureSpec, x: float, y: float) -> float:
