@@ -324,8 +324,9 @@ def test_a_put_back_out_of_reach_too_soon_after_its_pick_is_refused_saying_why()
 
 @pytest.mark.closed_loop
 def test_a_put_back_out_of_reach_is_stepped_to_and_placed(tmp_path: Path) -> None:
-    # Measured in both strategies: placed on the table, no fall, peak torque ratio 0.81.
-    text = _put_back()
+    # The script as drawn (held 3.54 s) was measured in both strategies: placed on the table,
+    # no fall, peak torque ratio 0.81; held 1.5 s here (CI time), the same.
+    text = _put_back(hold=1.5)
     result = run_scenario(load_scenario("<put-back>", text), text, RunOptions(out_dir=tmp_path))
     m = result.metrics
     assert not m["fell"] and m["passed"], m["expectations"]
