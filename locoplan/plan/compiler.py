@@ -317,22 +317,65 @@ def _stepper(
     index = 1 + max(t.index for t in tasks)
 
     def stepped(cm: int) -> Plan:
-        walk = PlannedTask(
-            index=index,
-            action="walk",
-            start=start,
-            end=end,
-            distance=(cm / 100.0, 0.0),
-            angle=0.0,
-        )
         note = (
             f"the pick of '{pick.object}' starts with a step {cm / 100.0:.2f} m nearer, from "
             f"{start:.2f} to {end:.2f} s: {why}"
         )
-        planned = (*(later if t is pick else t for t in tasks), walk)
-        return compile_stepped(tuple(sorted(planned, key=lambda t: (t.start, t.index))), note)
+        others = tuple(later if t is pick else t for t in tasks)
+        return compile_stepped(_with_step(others, index, start, end, cm), note)
 
     return stepped
+
+
+def _with_step(
+    tasks: tuple[PlannedTask, ...], index: int, start: float, end: float, cm: int
+) -> tuple[PlannedTask, ...]:
+    """`tasks` and a walk (task `index`) `cm` cm straight ahead from `start` to `end` (s),
+    sorted by start."""
+    walk = PlannedTask(
+        index=index, action="walk", start=start, end=end, distance=(cm / 100.0, 0.0), angle=0.0
+    )
+    return tuple(sorted((*tasks, walk), key=lambda t: (t.start, t.index)))
+
+
+def _lifting(
+    stepped: Callable[[int], Plan], robot: str, cm: int, refusals: list[str]
+) -> Plan | None:
+    """The plan `stepped(cm)` if it compiles and `check_lift` accepts its lifts, else None
+    (what refused it appended to `refusals`)."""
+    try:
+        plan = stepped(cm)
+        check_lift(plan, robot)
+    except InfeasiblePlanError as again:
+        refusals.append(again.message)
+        return None
+    return plan
+
+
+def _shortest_step(
+    exc: InfeasiblePlanError, low: int, high: int, stepped: Callable[[int], Plan], robot: str
+) -> tuple[int, Plan]:
+    """The shortest step (cm) within [low, high] from the refusal's miss (`exc.excess`: a
+    step straight ahead brings points ahead of the trunk in by about its length) up, a
+    centimetre longer at a time (each try a compile, a second or more), whose plan
+    `stepped(cm)` `_lifting` accepts, and that plan; raises `exc` saying why none is."""
+    first = max(low, math.ceil((exc.excess or 0.0) * 100.0 - 1e-9))
+    if first > high:
+        raise _no_step(
+            exc,
+            f"that takes a step of {first / 100.0:.2f} m at least, more than the "
+            f"{high / 100.0:.2f} m the stride and the fixtures allow",
+        )
+    refusals: list[str] = []
+    for cm in range(first, high + 1):
+        plan = _lifting(stepped, robot, cm, refusals)
+        if plan is not None:
+            return cm, plan
+    raise _no_step(
+        exc,
+        f"even {high / 100.0:.2f} m nearer, the most the stride and the fixtures allow: "
+        + refusals[-1],
+    )
 
 
 def _step_in_for_the_reach(
@@ -385,45 +428,13 @@ def _step_in_for_the_reach(
     stepped = _stepper(scenario, tasks, pick, compile_stepped, why)
     tol = geometry.grasp_tolerance
 
-    refusals: list[str] = []
-
-    def accepted(cm: int) -> Plan | None:
-        """The plan stepping `cm` cm nearer if it compiles and its lifts balance, else None
-        (what refused it kept in `refusals`)."""
-        try:
-            candidate = stepped(cm)
-            check_lift(candidate, scenario.robot)
-        except InfeasiblePlanError as again:
-            refusals.append(again.message)
-            return None
-        return candidate
-
     def margin(p: Plan, cm: int = 0) -> float:
         """The lift margin of `p` with the tolerance to spare (m), had it stood `cm` cm nearer."""
         m = pick_lift_margin(p, scenario.robot, pick.index, slack=-tol, nearer=cm / 100.0)
         return math.inf if m is None else m.margin
 
-    # The shortest step that reaches: from the refusal's miss (a step straight ahead brings
-    # grip points ahead of the trunk in by about its length), a centimetre longer at a time
-    # (each try a compile, a second or more).
-    first = max(low, math.ceil((exc.excess or 0.0) * 100.0 - 1e-9))
-    if first > high:
-        raise _no_step(
-            exc,
-            f"that takes a step of {first / 100.0:.2f} m at least, more than the "
-            f"{high / 100.0:.2f} m the stride and the fixtures allow",
-        )
-    best = None
-    for hi in range(first, high + 1):
-        best = accepted(hi)
-        if best is not None:
-            break
-    if best is None:
-        raise _no_step(
-            exc,
-            f"even {high / 100.0:.2f} m nearer, the most the stride and the fixtures allow: "
-            + refusals[-1],
-        )
+    # The shortest step that reaches.
+    hi, best = _shortest_step(exc, low, high, stepped, scenario.robot)
     if margin(best) >= 0.0:
         return best
     # Then, as for a lift (`_step_in_for_the_lift`), the lift's margin with the grasp tolerance
@@ -432,7 +443,7 @@ def _step_in_for_the_reach(
     ahead = next((cm for cm in range(hi + 1, high + 1) if margin(best, cm - hi) >= 0.0), None)
     if ahead is not None:
         for cm in range(ahead, high + 1):
-            plan = accepted(cm)
+            plan = _lifting(stepped, scenario.robot, cm, [])
             if plan is not None and margin(plan) >= 0.0:
                 return plan
     return best
@@ -491,42 +502,17 @@ def _step_in_for_the_place(
     if isinstance(lengths, str):
         raise _no_step(exc, lengths)
     low, high = lengths
-    first = max(low, math.ceil((exc.excess or 0.0) * 100.0 - 1e-9))
-    if first > high:
-        raise _no_step(
-            exc,
-            f"that takes a step of {first / 100.0:.2f} m at least, more than the "
-            f"{high / 100.0:.2f} m the stride and the fixtures allow",
-        )
     index = 1 + max(t.index for t in tasks)
-    refusals: list[str] = []
-    for cm in range(first, high + 1):
-        walk = PlannedTask(
-            index=index,
-            action="walk",
-            start=start,
-            end=drop.start,
-            distance=(cm / 100.0, 0.0),
-            angle=0.0,
-        )
+
+    def stepped(cm: int) -> Plan:
         note = (
             f"the drop of '{drop.object}' onto '{drop.onto}' comes after a step {cm / 100.0:.2f} m "
             f"nearer, from {start:.2f} to {drop.start:.2f} s: from where the robot stands its "
             "place points at the release are beyond the arms' reach"
         )
-        planned = tuple(sorted((*tasks, walk), key=lambda t: (t.start, t.index)))
-        try:
-            plan = compile_stepped(planned, note)
-            check_lift(plan, scenario.robot)
-        except InfeasiblePlanError as again:
-            refusals.append(again.message)
-            continue
-        return plan
-    raise _no_step(
-        exc,
-        f"even {high / 100.0:.2f} m nearer, the most the stride and the fixtures allow: "
-        + refusals[-1],
-    )
+        return compile_stepped(_with_step(tasks, index, start, drop.start, cm), note)
+
+    return _shortest_step(exc, low, high, stepped, scenario.robot)[1]
 
 
 def _trunk_path(
