@@ -221,11 +221,12 @@ def test_structured_factor_and_least_distance_form(name: str) -> None:
     # LAPACK's LU and the structured factor (measured <= 4e-11).
     x_ref = np.linalg.solve(qp.H, -qp.g)
     assert rel(form.x_u, x_ref) < 1e-9
-    U, W = form.factors()
+    assert form.box is not None
+    U = form.factor()
+    W = form.rows(np.arange(form.box.shape[0] + qp.n_in))
     # U'HU = I: U = L^-T has the condition number cond(H)^1/2 ~ 5e3, so products lose about
     # 1e-16 * cond(H) (measured <= 1.5e-10).
     np.testing.assert_allclose(U.T @ qp.H @ U, np.eye(qp.n), rtol=0, atol=1e-9)
-    assert form.box is not None
     assert qp.C is not None
     np.testing.assert_array_equal(form.box, np.flatnonzero(np.isfinite(qp.x_lower)))
     # W = [U[box]; C U], the same sums in another order (entries of order 1e-1).

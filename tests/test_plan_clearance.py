@@ -244,21 +244,26 @@ def test_drop_on_a_belt_opens_the_downstream_hand_wider() -> None:
 
 
 def test_the_warm_up_covers_the_planners_kernel_signatures() -> None:
-    """`make warmup` compiles the clearance kernels once before the tests' processes start
-    (`clearance_kernels.warm_up`): it must cover the exact argument types (layout, read-only
-    flags) a plan's hand-path search passes, or every process would compile them again. In a
-    fresh process: the warm-up, then a plan with picks and drops; no kernel gains a
-    signature."""
+    """`make warmup` compiles the planner's kernels once before the tests' processes start
+    (`clearance_kernels.warm_up`, `trunk_kernels.warm_up`): it must cover the exact argument
+    types (layout, read-only flags) a plan's hand-path search and the trunk reference pass,
+    or every process would compile them again. In a fresh process: the warm-up, then a plan
+    with picks and drops and its trunk reference; no kernel gains a signature."""
     code = """
 import json
-from locoplan.plan import clearance_kernels as kn
+import numpy as np
+from locoplan.plan import clearance_kernels as kn, trunk_kernels as tk
 from locoplan.plan import compile_plan
 from locoplan.scenario import load_scenario_file
-names = ("track_points", "distances", "sample_gaps")
+kernels = [getattr(kn, n) for n in ("track_points", "distances", "sample_gaps")]
+kernels.append(tk.evaluate)
 kn.warm_up()
-before = [len(getattr(kn, n).signatures) for n in names]
-compile_plan(load_scenario_file("scenarios/package-transfer.yaml").scenario)
-after = [len(getattr(kn, n).signatures) for n in names]
+tk.warm_up()
+before = [len(k.signatures) for k in kernels]
+plan = compile_plan(load_scenario_file("scenarios/package-transfer.yaml").scenario)
+plan.trunk_reference(np.linspace(0.0, 5.0, 45))
+plan.trunk_reference([1.0, 2.0])
+after = [len(k.signatures) for k in kernels]
 print(json.dumps({"before": before, "after": after}))
 """
     root = Path(__file__).resolve().parents[1]
@@ -268,5 +273,5 @@ print(json.dumps({"before": before, "after": after}))
     )  # fmt: skip
     assert res.returncode == 0, res.stderr
     counts = json.loads(res.stdout.strip().splitlines()[-1])
-    assert counts["before"] == [1, 1, 1], counts
+    assert counts["before"] == [1, 1, 1, 1], counts
     assert counts["after"] == counts["before"]

@@ -9,6 +9,8 @@ import pytest
 from plan_fixtures import repo_scenario, scenario_from_text
 
 from locoplan.plan import compile_plan
+from locoplan.plan.profiles import cruise_array
+from locoplan.plan.trunk import TrunkPath
 
 TURN_WALK = """
 version: 1
@@ -117,3 +119,53 @@ def test_walks_and_turns_peak_at_one_and_a_half_times_their_average() -> None:
         # The plateau: the middle third moves at the peak speed.
         mid = (ref.yaw_rate if task is turn else speed)[speed.size // 3 + 1 : 2 * speed.size // 3]
         assert np.allclose(np.abs(mid), 1.5 * amount / duration, rtol=1e-12)
+
+
+def _numpy_evaluate(path: TrunkPath, t: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The trunk reference as numpy computed it before it was compiled (the reference the
+    kernel must match bit for bit: `trunk_kernels`)."""
+    i = np.searchsorted(path._t0, t, side="right") - 1
+    dur = path._dur[i]
+    s, ds, dds = cruise_array((t - path._t0[i]) / dur)
+    dp = path._dp[i]
+    pos = np.empty((t.shape[0], 3))
+    pos[:, :2] = path._p0[i] + s[:, None] * dp
+    pos[:, 2] = path.height
+    vel = np.zeros((t.shape[0], 3))
+    vel[:, :2] = (ds / dur)[:, None] * dp
+    acc = np.zeros((t.shape[0], 3))
+    acc[:, :2] = (dds / (dur * dur))[:, None] * dp
+    dyaw = path._dyaw[i]
+    return (
+        pos,
+        vel,
+        acc,
+        path._yaw0[i] + s * dyaw,
+        ds / dur * dyaw,
+        dds / (dur * dur) * dyaw,
+    )
+
+
+def test_compiled_reference_is_the_numpy_one_bit_for_bit() -> None:
+    plan = compile_plan(scenario_from_text(TURN_WALK))
+    rng = np.random.default_rng(7)
+    # Before the first task, inside every ramp and cruise, on the segments' ends, after all.
+    ends = [x for task in plan.tasks for x in (task.start, task.end)]
+    t = np.concatenate([rng.uniform(-0.5, 6.5, 400), ends, [0.0, -1.0, 100.0]])
+    ref = plan.trunk_reference(t)
+    got = (
+        ref.position,
+        ref.velocity,
+        ref.acceleration,
+        ref.yaw,
+        ref.yaw_rate,
+        ref.yaw_acceleration,
+    )
+    for a, b in zip(got, _numpy_evaluate(plan.trunk, t), strict=True):
+        np.testing.assert_array_equal(a, b)
+    # The scalar path agrees to rounding (it is `profiles.cruise`, written apart).
+    for k in range(0, t.shape[0], 37):
+        x, y, yaw, vx, vy, wz = plan.trunk.pose_at(float(t[k]))
+        assert (x, y, yaw, vx, vy, wz) == pytest.approx(
+            (*ref.position[k, :2], ref.yaw[k], *ref.velocity[k, :2], ref.yaw_rate[k]), abs=1e-12
+        )

@@ -9,6 +9,7 @@ active-set (daqp, exact up to rounding) end points.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import replace
 
@@ -259,7 +260,7 @@ def _least_distance(p: QpProblem) -> LeastDistanceForm:
     hi = p.x_upper if p.x_upper is not None else np.full(p.n, np.inf)
     box = np.flatnonzero(np.isfinite(lo) | np.isfinite(hi))
     W = np.vstack([U[box], p.C @ U])
-    return LeastDistanceForm(x_u=-np.linalg.solve(p.H, p.g), factors=lambda: (U, W))
+    return LeastDistanceForm.from_dense(-np.linalg.solve(p.H, p.g), U, W)
 
 
 def _inequality_problem(seed: int, scale: float = 1.0) -> QpProblem:
@@ -271,16 +272,34 @@ def _inequality_problem(seed: int, scale: float = 1.0) -> QpProblem:
 
 
 def test_daqp_least_distance_matches_piqp() -> None:
+    rounds = []
     for seed in range(4):
         p = _inequality_problem(seed)
-        sol = QpSolver("daqp", TIGHT).solve(p, least_distance=_least_distance(p))
+        form = _least_distance(p)
+        asked: list[np.ndarray] = []
+
+        def rows(
+            idx: np.ndarray, form: LeastDistanceForm = form, asked: list[np.ndarray] = asked
+        ) -> np.ndarray:
+            asked.append(np.array(idx))
+            return form.rows(idx)
+
+        sol = QpSolver("daqp", TIGHT).solve(p, least_distance=replace(form, rows=rows))
         ref = solve_qp(p, "piqp", TIGHT)
+        # DAQP sees a subset of W's rows, growing by the rows its optimum violates; each
+        # round's rows hold the previous round's.
+        rounds.append(len(asked))
+        assert asked[0].shape[0] < p.n + p.n_in
+        for a, b in itertools.pairwise(asked):
+            assert np.isin(a, b).all() and b.shape[0] > a.shape[0]
         assert sol.ok and ref.ok and sol.iterations > 0
         np.testing.assert_allclose(sol.x, ref.x, atol=TOL)
         # Multipliers of W's rows are the QP's: stationarity in x to 1e-6 (TOL).
         np.testing.assert_allclose(_stationarity(p, sol), 0.0, atol=TOL)
         np.testing.assert_allclose(sol.z_in, ref.z_in, atol=TOL)
         np.testing.assert_allclose(sol.z_box, ref.z_box, atol=TOL)
+    # These problems take more than one round (measured: 2-3 rounds each).
+    assert max(rounds) > 1
 
 
 def test_daqp_least_distance_unconstrained_minimiser() -> None:
@@ -288,10 +307,12 @@ def test_daqp_least_distance_unconstrained_minimiser() -> None:
     p = _inequality_problem(0, scale=1e-3)
     form = _least_distance(p)
 
-    def no_factors() -> tuple[np.ndarray, np.ndarray]:
+    def no_factor(*_: object) -> np.ndarray:
         raise AssertionError("U and W are not needed when x_u meets every bound")
 
-    sol = QpSolver("daqp", TIGHT).solve(p, least_distance=replace(form, factors=no_factors))
+    sol = QpSolver("daqp", TIGHT).solve(
+        p, least_distance=replace(form, factor=no_factor, rows=no_factor)
+    )
     assert sol.ok and sol.iterations == 0
     np.testing.assert_allclose(sol.x, -np.linalg.solve(p.H, p.g), atol=1e-12)
     assert not np.any(sol.z_in) and not np.any(sol.z_box)

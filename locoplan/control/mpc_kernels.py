@@ -654,53 +654,60 @@ def dense_factor(
 
 
 @njit(cache=True, error_model="numpy")
-def constraint_rows(U: FloatArray, rows: FloatArray, box: IntArray) -> FloatArray:
-    """W = [U[box]; C U] for an upper-triangular, C-contiguous U (n, n) and C block-diagonal:
-    ``rows`` (R, 5) per foot-step of five consecutive variables, i.e.
-    W[n_b + R f + r] = rows[r] @ U[5 f : 5 f + 5] (n_b = len(box)). Each row is written once,
-    from column 5 f on (U is zero below its diagonal); a row of ``rows`` with at most two
-    nonzeros (all of the wrench rows) takes one pass over the two rows of U it combines."""
+def constraint_rows(U: FloatArray, rows: FloatArray, box: IntArray, idx: IntArray) -> FloatArray:
+    """Rows ``idx`` of W = [U[box]; C U] for an upper-triangular, C-contiguous U (n, n) and C
+    block-diagonal: ``rows`` (R, 5) per foot-step of five consecutive variables, i.e.
+    W[n_b + R f + r] = rows[r] @ U[5 f : 5 f + 5] (n_b = len(box)); every index in ``idx``
+    below n_b + (n / 5) R. Each row is written once, from column 5 f on (U is zero below its
+    diagonal); a row of ``rows`` with at most two nonzeros (all of the wrench rows) takes one
+    pass over the two rows of U it combines."""
     n = U.shape[0]
     R = rows.shape[0]
     n_b = box.shape[0]
-    n_fs = n // 5
-    W = np.empty((n_b + n_fs * R, n))
-    for i in range(n_b):
-        q = box[i]
-        W[i, :q] = 0.0
-        W[i, q:] = U[q, q:]
+    # Each wrench row's nonzeros: how many, and the first two (column, weight).
+    nnz = np.zeros(R, dtype=np.int64)
+    col = np.zeros((R, 2), dtype=np.int64)
+    wt = np.zeros((R, 2))
     for r in range(R):
-        nnz = 0
-        a1, a2 = 0, 0
-        w1, w2 = 0.0, 0.0
         for a in range(5):
             if rows[r, a] != 0.0:
-                nnz += 1
-                if nnz == 1:
-                    a1, w1 = a, rows[r, a]
-                else:
-                    a2, w2 = a, rows[r, a]
-        for f in range(n_fs):
-            c0 = 5 * f
-            Wr = W[n_b + R * f + r]
-            Wr[:c0] = 0.0
-            if nnz == 0:
-                Wr[c0:] = 0.0
-            elif nnz == 1:
-                u1 = U[c0 + a1]
-                for c in range(c0, n):
-                    Wr[c] = w1 * u1[c]
-            elif nnz == 2:
-                u1 = U[c0 + a1]
-                u2 = U[c0 + a2]
-                for c in range(c0, n):
-                    Wr[c] = w1 * u1[c] + w2 * u2[c]
-            else:
-                for c in range(c0, n):
-                    acc = 0.0
-                    for a in range(5):
-                        acc += rows[r, a] * U[c0 + a, c]
-                    Wr[c] = acc
+                if nnz[r] < 2:
+                    col[r, nnz[r]] = a
+                    wt[r, nnz[r]] = rows[r, a]
+                nnz[r] += 1
+    W = np.empty((idx.shape[0], n))
+    for k in range(idx.shape[0]):
+        j = idx[k]
+        Wr = W[k]
+        if j < n_b:
+            q = box[j]
+            Wr[:q] = 0.0
+            Wr[q:] = U[q, q:]
+            continue
+        f = (j - n_b) // R
+        r = (j - n_b) - R * f
+        c0 = 5 * f
+        Wr[:c0] = 0.0
+        if nnz[r] == 0:
+            Wr[c0:] = 0.0
+        elif nnz[r] == 1:
+            u1 = U[c0 + col[r, 0]]
+            w1 = wt[r, 0]
+            for c in range(c0, n):
+                Wr[c] = w1 * u1[c]
+        elif nnz[r] == 2:
+            u1 = U[c0 + col[r, 0]]
+            u2 = U[c0 + col[r, 1]]
+            w1 = wt[r, 0]
+            w2 = wt[r, 1]
+            for c in range(c0, n):
+                Wr[c] = w1 * u1[c] + w2 * u2[c]
+        else:
+            for c in range(c0, n):
+                acc = 0.0
+                for a in range(5):
+                    acc += rows[r, a] * U[c0 + a, c]
+                Wr[c] = acc
     return W
 
 
@@ -750,6 +757,8 @@ def warm_up() -> None:
     factor_solve(-g, Gam, L_diag, Z, start, size)
     n = cols.shape[0]
     dense_factor(Gam, L_diag, Z, start, size)
-    constraint_rows(np.eye(n), np.ones((2, 5)), np.arange(2, n, 5, dtype=np.int64))
+    constraint_rows(
+        np.eye(n), np.ones((2, 5)), np.arange(2, n, 5, dtype=np.int64), np.arange(3, dtype=np.int64)
+    )
     finish(np.zeros((N, 2, 5)), Tw, c, s, tau, force)
     _warm = True

@@ -38,6 +38,7 @@ therefore on by default for both backends.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -96,6 +97,11 @@ _DAQP_STATUS: Final[dict[int, str]] = {
 _DAQP_ACTIVE: Final = 1
 _DAQP_LOWER: Final = 2
 _DAQP_EQUALITY: Final = 5
+# Rounds of the least-distance solve on a subset of W's rows (`QpSolver`), the last with
+# every row. The subset starts with the rows violated at the unconstrained minimiser and
+# takes in those its optimum violates: on the package transfer's 465 recorded MPC updates
+# (HECTOR, 760 rows by 200 variables at the drop) at most 3 rounds were needed.
+_SUBSET_ROUNDS: Final = 6
 
 
 def _is_sparse(M: object) -> bool:
@@ -354,6 +360,21 @@ def _complementarity(p: QpProblem, x: FloatArray, z_in: FloatArray, z_box: Float
     return worst
 
 
+@functools.cache
+def _identity(n: int) -> FloatArray:
+    """The least-distance form's Hessian, one per size: a fresh np.eye(200) costs 0.1-0.2 ms
+    (the 320 kB come from mmap, page-faulted in). DAQP only reads it (its setup copies what
+    it keeps; checked: unchanged after setups and solves), but its wrapper asks for a
+    writable buffer."""
+    return np.eye(n)
+
+
+@functools.cache
+def _zeros(n: int) -> FloatArray:
+    """The least-distance form's linear term (see `_identity`)."""
+    return np.zeros(n)
+
+
 def _violation(p: QpProblem, x: FloatArray) -> float:
     """Largest violation of p's constraints at x (inf norm, >= 0)."""
     v = 0.0
@@ -389,19 +410,32 @@ class LeastDistanceForm:
     the inverse Hessian, H^-1 = U U' (e.g. L^-T for H = L L'), and x = x_u + U y, the QP is
     min 1/2 |y|^2 subject to the QP's bounds, shifted by x_u, on the rows of
     W (n_b + n_in, n): U[box_index] (the box on x) above C U, where ``box_index`` are the n_b
-    variables with a finite lower or upper bound, in increasing order. ``factors()`` returns
-    (U, W); it is called only when x_u violates a bound, since they cost more than x_u. That
-    is DAQP's own internal form: it reaches it with an O(n^3) transformation in plain C
-    (2.5 ms at n = 200), which a caller that knows the structure of its problem (cached
-    factor blocks, a block-diagonal C) computes far faster. The multipliers of W's rows are
-    the QP's (the same constraints, in y). No array is kept after the solve. ``box``: the
-    caller's ``box_index`` when it has it (W was built with it): the solver then takes it as
-    given instead of finding the finite bounds itself.
+    variables with a finite lower or upper bound, in increasing order. ``factor()`` returns
+    U, ``rows(idx)`` the rows ``idx`` (increasing) of W; neither is called unless x_u
+    violates a bound, since they cost more than x_u, and the solver asks only for the rows
+    it needs (`QpSolver`). That is DAQP's own internal form: it reaches it with an O(n^3)
+    transformation in plain C (2.5 ms at n = 200), which a caller that knows the structure
+    of its problem (cached factor blocks, a block-diagonal C) computes far faster. The
+    multipliers of W's rows are the QP's (the same constraints, in y). No array is kept
+    after the solve. ``box``: the caller's ``box_index`` when it has it (W was built with
+    it): the solver then takes it as given instead of finding the finite bounds itself.
     """
 
     x_u: FloatArray
-    factors: Callable[[], tuple[FloatArray, FloatArray]]
+    factor: Callable[[], FloatArray]
+    rows: Callable[[npt.NDArray[np.intp]], FloatArray]
     box: npt.NDArray[np.integer[Any]] | None = None
+
+    @classmethod
+    def from_dense(
+        cls,
+        x_u: FloatArray,
+        U: FloatArray,
+        W: FloatArray,
+        box: npt.NDArray[np.integer[Any]] | None = None,
+    ) -> LeastDistanceForm:
+        """The form of U and the whole W given as arrays."""
+        return cls(x_u=x_u, factor=lambda: U, rows=lambda idx: W[idx], box=box)
 
 
 class QpSolver:
@@ -863,14 +897,14 @@ class QpSolver:
         if viol <= s.eps_abs:
             # The unconstrained minimiser meets every bound: DAQP is not needed.
             return self._least_distance_solution(p, t0, x_u, "solved", 0, 0.0, viol, z_in, z_box)
-        U, W = form.factors()
-        if U.shape != (n, n) or W.shape != (n_b + m, n):
-            raise ValueError(
-                f"LeastDistanceForm: U {U.shape}, W {W.shape}; expected ({n}, {n}) and "
-                f"({n_b + m}, {n})"
-            )
-        sense = np.zeros(n_b + m, dtype=np.intc)
-        keep_state = s.warm_start and hint is None and self._has_result
+        U = form.factor()
+        if U.shape != (n, n):
+            raise ValueError(f"LeastDistanceForm: U {U.shape}, expected ({n}, {n})")
+        k = n_b + m
+        sense = np.zeros(k, dtype=np.intc)
+        # The rows DAQP gets: those violated at x_u, the hinted ones, then those the
+        # subset's optimum violates (below).
+        take = (lower > s.eps_abs) | (upper < -s.eps_abs)
         if s.warm_start and hint is not None:
             ids = np.asarray(hint, dtype=np.intp).reshape(-1)
             ids = ids[(ids >= 0) & (ids < 2 * (m + n))]
@@ -886,41 +920,61 @@ class QpSolver:
             # Only a finite bound can be active.
             ok = np.where(up, np.isfinite(upper[idx]), np.isfinite(lower[idx]))
             sense[idx[ok]] = np.where(up[ok], _DAQP_ACTIVE, _DAQP_ACTIVE | _DAQP_LOWER)
-        t1 = time.perf_counter()
-        model = self._solver
-        key = ("least_distance", n, n_b + m)
-        if isinstance(model, daqp.Model) and self._key == key:
-            # Without sense, DAQP starts from the active set its previous solve ended with.
-            flag = int(
-                model.update(A=W, bupper=upper, blower=lower, sense=None if keep_state else sense)
-            )
-            reused = True
-        else:
+            take[idx[ok]] = True
+        iterations, setup = 0, 0.0
+        x = np.full(n, math.nan)
+        status = "max_iterations"
+        for rnd in range(_SUBSET_ROUNDS):
+            if rnd == _SUBSET_ROUNDS - 1:
+                take[:] = True  # the last round holds every row: the full problem's optimum
+            S = np.flatnonzero(take)
+            W = form.rows(S)
+            if W.shape != (S.shape[0], n):
+                raise ValueError(f"LeastDistanceForm.rows: {W.shape}, expected ({S.shape[0]}, {n})")
+            t1 = time.perf_counter()
             model = daqp.Model()
             model.settings = {"primal_tol": s.eps_abs, "iter_limit": s.max_iter}
-            flag = int(model.setup(np.eye(n), np.zeros(n), W, upper, lower, sense)[0])
-            self._solver, self._key = model, key
-            reused = False
-        setup = time.perf_counter() - t1
-        if flag < 0:
-            self.reset()
-            status = _DAQP_STATUS.get(flag, f"daqp_{flag}")
-            nan = np.full(n, math.nan)
-            return self._least_distance_solution(
-                p, t0, nan, status, 0, setup, math.inf, z_in, z_box, reused
-            )
-        y, _, flag, info = model.solve()
-        status = _DAQP_STATUS.get(int(flag), f"daqp_{flag}")
-        x = x_u + U @ y
-        if status == "solved":
+            flag = int(model.setup(_identity(n), _zeros(n), W, upper[S], lower[S], sense[S])[0])
+            setup += time.perf_counter() - t1
+            if flag < 0:
+                status = _DAQP_STATUS.get(flag, f"daqp_{flag}")
+                break
+            y, _, flag, info = model.solve()
+            iterations += int(info["iterations"])
+            status = _DAQP_STATUS.get(int(flag), f"daqp_{flag}")
+            if status != "solved":
+                break
             lam = np.asarray(info["lam"], dtype=np.float64)
-            z_box[box] = lam[:n_b]
-            z_in = lam[n_b:]
-            viol = _violation(p, x)
-        else:
-            viol = math.inf
+            Uy = U @ y
+            x = x_u + Uy
+            # Every row's value at x less its value at x_u: W y, from x's rows (the rows
+            # DAQP did not see are checked here, those it did are met to its tolerance).
+            Wy = np.empty(k)
+            Wy[:n_b] = Uy[box]
+            if p.C is not None:
+                Wy[n_b:] = p.C @ Uy
+            out = (Wy < lower - s.eps_abs) | (Wy > upper + s.eps_abs)
+            out[S] = False
+            if not out.any():
+                # Every row met: the subset's optimum is the full problem's (its feasible
+                # set holds the full one's, and its optimum lies in it).
+                z_all = np.zeros(k)
+                z_all[S] = lam
+                z_box[box] = z_all[:n_b]
+                z_in = z_all[n_b:]
+                viol = _violation(p, x)
+                return self._least_distance_solution(
+                    p, t0, x, status, iterations, setup, viol, z_in, z_box
+                )
+            # Next round from this one's active set, with the rows it violated.
+            sense[S] = np.where(
+                lam > 0.0, _DAQP_ACTIVE, np.where(lam < 0.0, _DAQP_ACTIVE | _DAQP_LOWER, 0)
+            )
+            take |= out
+        self.reset()
+        nan = np.full(n, math.nan)
         return self._least_distance_solution(
-            p, t0, x, status, int(info["iterations"]), setup, viol, z_in, z_box, reused
+            p, t0, nan, status, iterations, setup, math.inf, z_in, z_box
         )
 
     def _least_distance_solution(

@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from locoplan.plan.profiles import cruise, cruise_array
+from locoplan.plan import trunk_kernels
+from locoplan.plan.profiles import cruise
 from locoplan.plan.tasks import PlannedTask
 
 FloatArray = npt.NDArray[np.float64]
@@ -95,29 +96,18 @@ class TrunkPath:
     _t0_list: list[float]
 
     def evaluate(self, times: npt.ArrayLike) -> TrunkReference:
-        """Vectorised reference at `times` (n,) s."""
-        t = np.asarray(times, dtype=float)
-        i = np.searchsorted(self._t0, t, side="right") - 1
-        dur = self._dur[i]
-        tau = (t - self._t0[i]) / dur
-        s, ds, dds = cruise_array(tau)
-        n = t.shape[0]
-        dp = self._dp[i]
-        pos = np.empty((n, 3))
-        pos[:, :2] = self._p0[i] + s[:, None] * dp
-        pos[:, 2] = self.height
-        vel = np.zeros((n, 3))
-        vel[:, :2] = (ds / dur)[:, None] * dp
-        acc = np.zeros((n, 3))
-        acc[:, :2] = (dds / (dur * dur))[:, None] * dp
-        dyaw = self._dyaw[i]
+        """Vectorised reference at `times` (n,) s (compiled: `trunk_kernels.evaluate`)."""
+        t = np.ascontiguousarray(times, dtype=np.float64).reshape(-1)
+        pos, vel, acc, yaw, rate, yaw_acc = trunk_kernels.evaluate(
+            t, self._t0, self._dur, self._p0, self._dp, self._yaw0, self._dyaw, self.height
+        )
         return TrunkReference(
             position=pos,
             velocity=vel,
             acceleration=acc,
-            yaw=self._yaw0[i] + s * dyaw,
-            yaw_rate=ds / dur * dyaw,
-            yaw_acceleration=dds / (dur * dur) * dyaw,
+            yaw=yaw,
+            yaw_rate=rate,
+            yaw_acceleration=yaw_acc,
         )
 
     def pose_at(self, t: float) -> tuple[float, float, float, float, float, float]:
