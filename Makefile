@@ -50,7 +50,7 @@ types: install
 # every test process and every subprocess that starts before the cache is written compiles
 # them itself (~40 s of CPU each). warm_up's 22 only
 # sizes the arrays; the kernels are compiled for their types.
-WARM_UP := $(BIN)/python -c "import locoplan.sim.run; from locoplan.control import mpc_kernels, wbc_kernels; from locoplan.plan import clearance_kernels, trunk_kernels; mpc_kernels.warm_up(); wbc_kernels.warm_up(22); clearance_kernels.warm_up(); trunk_kernels.warm_up()"
+WARM_UP := $(BIN)/python -c "import locoplan.sim.run; from locoplan.control import mpc_kernels, reference_kernels, wbc_kernels; from locoplan.plan import clearance_kernels, trunk_kernels; mpc_kernels.warm_up(); wbc_kernels.warm_up(22); reference_kernels.warm_up(); clearance_kernels.warm_up(); trunk_kernels.warm_up()"
 
 warmup: install
 	$(WARM_UP)

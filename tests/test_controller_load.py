@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from plan_fixtures import scenario_from_text
 
+from locoplan.control import reference_kernels
 from locoplan.control.controller import (
     FOOT_FIXTURE_CLEARANCE,
     LOAD_LEAD,
@@ -491,3 +492,36 @@ def test_lift_feed_forward_has_the_whole_weight_from_the_planned_lift_off() -> N
         assert ctl._lift_mass(t, 0.0) == pytest.approx(hold.mass, abs=1e-12)
     assert ctl._lift_mass(hold.lift + 0.1, 1.2 * hold.mass) == pytest.approx(1.2 * hold.mass)
     assert ctl._lift_mass(hold.lift + LOAD_RAMP + 1e-3, 0.3) == 0.3
+
+
+def test_load_shift_kernels_are_the_numpy_they_replace_bit_for_bit() -> None:
+    """`reference_kernels` against the numpy `_com_shift` computed before it was compiled, on
+    random offsets with ties (equal distances), zero loads and an object on the CoM."""
+    rng = np.random.default_rng(11)
+    n = 300
+    p_com = rng.uniform(-1.0, 1.0, (n, 3))
+    both = rng.uniform(-1.0, 1.0, (2 * n, 3))
+    both[n : n + 20] = both[:20]  # ties: the same offset at both times
+    both[:10, :2] = p_com[:10, :2]  # the object on the CoM at both times
+    both[n : n + 10, :2] = p_com[:10, :2]
+    mass = rng.uniform(0.0, 8.0, n)
+    mass[30:40] = 0.0
+    robot_mass = 17.3
+    d = both[:n, :2] - p_com[:, :2]
+    d_now = both[n:, :2] - p_com[:, :2]
+    far = np.einsum("ij,ij->i", d_now, d_now) > np.einsum("ij,ij->i", d, d)
+    d = np.where(far[:, None], d_now, d)
+    s = (mass / (robot_mass + mass))[:, None] * d
+    size_ref = np.linalg.norm(s, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        unit_ref = np.where(size_ref[:, None] > 1e-9, s / size_ref[:, None], 0.0)
+    size, unit = reference_kernels.load_shift(both, p_com, mass, robot_mass)
+    np.testing.assert_array_equal(size, size_ref)
+    np.testing.assert_array_equal(unit, unit_ref)
+    along = rng.uniform(0.0, 0.1, n)
+    pre = rng.uniform(-0.1, 0.1, (n, 2))
+    shift = -along[:, None] * unit_ref
+    pre[50:60] = shift[50:60]  # ties keep the shift (the same values either way)
+    bigger = np.einsum("ij,ij->i", pre, pre) > np.einsum("ij,ij->i", shift, shift)
+    expected = np.where(bigger[:, None], pre, shift)
+    np.testing.assert_array_equal(reference_kernels.larger_shift(along, unit, pre), expected)

@@ -31,7 +31,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from locoplan.control import wbc_kernels
+from locoplan.control import reference_kernels, wbc_kernels
 from locoplan.control.contact import ContactLimits, ankle_row_binds, ankle_torque_row
 from locoplan.control.lean import TrunkLean
 from locoplan.control.mpc import MpcInput, MpcSettings, MpcSolution, MultiContactMpc
@@ -644,6 +644,7 @@ class LocoManipulationController:
         self._approach_gains = None if kp_a is None else (kp_a, 2.0 * math.sqrt(kp_a))
         if s.mapping == "wbc":
             wbc_kernels.warm_up(robot.nv)
+        reference_kernels.warm_up()
         self._nominal_geometry()
         # Each hold that leans before its lift-off, when it leans, and where (x, y) its object
         # is gripped at the lift-off (`_pre_lean`; the plan fixes it, so once here).
@@ -1531,27 +1532,24 @@ class LocoManipulationController:
         feet stand: the CoM reference now (2,) and the feet's support polygon; `standing`
         (n,) marks the rows the feet still stand as they do now (None: all of them; the
         others take the nominal offset)."""
-        n = len(t_lead)
         both = self._planned_object_positions(
             self._held_times(np.concatenate([t_lead, t_lead - LOAD_LEAD]))
-        )[:, :2]
-        d = both[:n] - p_com[:, :2]
-        d_now = both[n:] - p_com[:, :2]
-        far = np.einsum("ij,ij->i", d_now, d_now) > np.einsum("ij,ij->i", d, d)
-        d = np.where(far[:, None], d_now, d)
-        s = (mass / (self.mass + mass))[:, None] * d
-        size = np.linalg.norm(s, axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            unit = np.where(size[:, None] > 1e-9, s / size[:, None], 0.0)
+        )
+        size, unit = reference_kernels.load_shift(
+            both,
+            np.ascontiguousarray(p_com, dtype=np.float64),
+            np.ascontiguousarray(mass, dtype=np.float64),
+            float(self.mass),
+        )
         weights = self._lean_weights(t_lead)
         offset = self._offsets(support, standing, unit)
         along = self._lean_share(size, weights, offset) * size
         if offset is not None:
             along = np.maximum(along + weights * (offset - self._support_offset), 0.0)
-        shift = -along[:, None] * unit
         pre = self._pre_lean(t_lead - LOAD_LEAD, p_com, support, standing)
-        bigger = np.einsum("ij,ij->i", pre, pre) > np.einsum("ij,ij->i", shift, shift)
-        return np.where(bigger[:, None], pre, shift)
+        return reference_kernels.larger_shift(
+            np.ascontiguousarray(along, dtype=np.float64), unit, pre
+        )
 
     def _offsets(
         self,
