@@ -581,3 +581,24 @@ def test_the_mpc_reference_velocity_carries_the_load_shifts_rate_through_a_loade
     # The shift's own rate is there to be carried (else the check above is empty).
     path = ctl._com_reference(t + dt * np.arange(1, x_ref.shape[0] + 1))[1][:, :2]
     assert np.linalg.norm(x_ref[:, 9:11] - path, axis=1).max() > 0.05
+
+
+def test_planned_object_positions_are_the_plans_through_pruning(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The memoised object positions are the plan's at the times rounded to 1 us, in the
+    order asked for, across misses, prefetches and the pruning of past times (a cache of 40
+    rows here, so that a sweep through the script prunes it many times)."""
+    import locoplan.control.controller as controller
+
+    monkeypatch.setattr(controller, "OBJECT_CACHE_SIZE", 40)
+    plan = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
+    desc = load_robot_description("hector")
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
+    dt = ctl.s.mpc.dt
+    for t in np.arange(0.0, 6.0, ctl.s.mpc_period):
+        times = np.concatenate([[t], t + dt * np.arange(1, 21), [t + 0.013]])[::-1]
+        got = ctl._planned_object_positions(times)
+        want = plan.object_positions(np.rint(times * 1e6) * 1e-6)
+        np.testing.assert_array_equal(got, want)
+    assert len(ctl._object_rows) <= 40 + 21 * (controller.OBJECT_PREFETCH + 1)

@@ -573,7 +573,10 @@ class LocoManipulationController:
         self._lean_now = 0.0
         self._lean_t = -math.inf
         self._stand_offset = np.zeros(2)
-        self._object_cache: dict[int, FloatArray] = {}
+        # Memoised planned object positions (`_planned_object_positions`): the row of each
+        # time (us) in the store.
+        self._object_rows: dict[int, int] = {}
+        self._object_store = np.empty((256, 3))
         # Measured-load feedback (see `_update_load`): filtered measured mass (kg) and the
         # offset (kg) of the measurement from the plan's load now.
         self._load_filtered: float | None = None
@@ -1226,23 +1229,40 @@ class LocoManipulationController:
         will ask for (the missed ones, one to OBJECT_PREFETCH MPC periods later): each call
         to the plan costs some 100 us before its first point, and without it nearly every
         update paid that for the two or three points at its horizon's end. The plan gives
-        every time the same value whichever batch it comes in."""
+        every time the same value whichever batch it comes in.
+
+        The positions are kept as rows of one array, found by key (`_object_rows`), and a
+        call whose times are all known is one gather: a list of 84 small arrays stacked
+        cost 45-55 us inside the loop for the CoM shift's times, the gather a quarter."""
         keys = np.rint(np.asarray(times, dtype=float) * 1e6).astype(np.int64).tolist()
-        cache = self._object_cache
-        wanted = {k for k in keys if k not in cache}
-        if wanted:
-            period = round(self.s.mpc_period * 1e6)
-            ahead = {k + j * period for k in wanted for j in range(1, OBJECT_PREFETCH + 1)}
-            missing = sorted(wanted | {k for k in ahead if k not in cache})
-            pos = self.plan.object_positions(np.asarray(missing, dtype=float) * 1e-6)
-            for k, p in zip(missing, np.asarray(pos, dtype=float), strict=True):
-                cache[k] = p
-            if len(cache) > OBJECT_CACHE_SIZE:
-                # Drop what lies in the past of the earliest time asked for now.
-                oldest = min(keys)
-                for k in [k for k in cache if k < oldest]:
-                    del cache[k]
-        return np.array([cache[k] for k in keys])
+        rows = self._object_rows
+        try:
+            return self._object_store[[rows[k] for k in keys]]
+        except KeyError:
+            pass
+        wanted = {k for k in keys if k not in rows}
+        period = round(self.s.mpc_period * 1e6)
+        ahead = {k + j * period for k in wanted for j in range(1, OBJECT_PREFETCH + 1)}
+        missing = sorted(wanted | {k for k in ahead if k not in rows})
+        pos = np.asarray(
+            self.plan.object_positions(np.asarray(missing, dtype=float) * 1e-6), dtype=float
+        )
+        store = self._object_store
+        if len(rows) + len(missing) > OBJECT_CACHE_SIZE:
+            # Drop what lies in the past of the earliest time asked for now.
+            oldest = min(keys)
+            kept = [k for k in rows if k >= oldest]
+            store = store[[rows[k] for k in kept]]
+            rows = {k: i for i, k in enumerate(kept)}
+        n = len(rows)
+        if n + len(missing) > store.shape[0]:
+            grown = np.empty((max(2 * store.shape[0], n + len(missing)), 3))
+            grown[:n] = store[:n]
+            store = grown
+        store[n : n + len(missing)] = pos
+        rows.update(zip(missing, range(n, n + len(missing)), strict=True))
+        self._object_rows, self._object_store = rows, store
+        return store[[rows[k] for k in keys]]
 
     def _update_load(self, t: float, hand_load: float | None) -> None:
         """Fold a measured hand load (N, vertical force the hands exert on held objects: wrist
