@@ -528,62 +528,6 @@ def test_load_shift_kernels_are_the_numpy_they_replace_bit_for_bit() -> None:
     np.testing.assert_array_equal(reference_kernels.larger_shift(along, unit, pre), expected)
 
 
-LOADED_TURN = """
-version: 1
-name: loaded-turn
-gait: {period: 0.4, swing: 0.19}
-objects:
-  parcel: {shape: box, size: [0.2, 0.18, 0.13], mass: 6.0, position: [0.29, 0.0, 0.5]}
-fixtures:
-  table: {kind: table, position: [0.4, 0.0, 0.0], size: [0.4, 0.55, 0.435]}
-tasks:
-  - {action: pick, object: parcel, start: 0.3, duration: 1.0}
-  - {action: turn, angle: 130, start: 1.5, duration: 2.4}
-"""
-
-
-def test_the_mpc_reference_velocity_carries_the_load_shifts_rate_through_a_loaded_turn() -> None:
-    """The MPC's reference velocity is its position's derivative, the CoM shift's included:
-    the shift lies along the load's direction, so a loaded turn carries the shifted CoM
-    reference round the trunk's axis (about 8 cm for 6 kg 0.3 m ahead), and with the trunk
-    path's velocity alone the MPC and the trunk task lagged it across the turn (HECTOR
-    envelope seed 88021, transfer-015: 8-12 cm to the side at the turn's end, fell at the
-    drop). Mid-turn, the reference's central differences over the horizon's steps match its
-    velocity rows to 1 cm/s (the trunk path's own differences are exact to O(dt^2): under
-    1 mm/s here), against a shift rate of some 0.1 m/s."""
-    plan = compile_plan(scenario_from_text(LOADED_TURN))
-    desc = load_robot_description("hector")
-    ctl = LocoManipulationController(PinocchioRobot(desc), desc, plan)
-    (hold,) = plan.holds
-    turn = plan.tasks[1]
-    t = 0.5 * (turn.start + turn.end)
-    ctl._update_load(t, hold.mass * 9.81)
-    p_com, v_com, yaw, _, _ = ctl._com_reference(np.array([t]))
-    c, s = np.cos(yaw[0]), np.sin(yaw[0])
-    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    feet = p_com[0] + ctl.foot_offset_from_com @ rot.T
-    feet[:, 2] = 0.0
-    x0 = np.concatenate([[0.0, 0.0, yaw[0]], p_com[0], np.zeros(3), v_com[0], [0.0, 0.0, -9.81]])
-    hands = plan.object_positions(np.array([t]))[0]
-    captured = []
-    update = ctl.mpc.update
-
-    def capture(inp: object) -> object:
-        captured.append(inp)
-        return update(inp)  # type: ignore[arg-type]
-
-    ctl.mpc.update = capture  # type: ignore[method-assign]
-    ctl._run_mpc(t, x0, p_com[0], v_com[0], feet, np.full(2, yaw[0]), hands, hold.mass)
-    (inp,) = captured
-    x_ref = inp.x_ref
-    dt = ctl.s.mpc.dt
-    central = (x_ref[2:, 3:5] - x_ref[:-2, 3:5]) / (2.0 * dt)
-    assert np.abs(central - x_ref[1:-1, 9:11]).max() < 0.01
-    # The shift's own rate is there to be carried (else the check above is empty).
-    path = ctl._com_reference(t + dt * np.arange(1, x_ref.shape[0] + 1))[1][:, :2]
-    assert np.linalg.norm(x_ref[:, 9:11] - path, axis=1).max() > 0.05
-
-
 def test_planned_object_positions_are_the_plans_through_pruning(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

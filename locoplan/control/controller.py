@@ -591,7 +591,6 @@ class LocoManipulationController:
         # Steps added to the plan's schedule (`_add_steps`).
         self.recovery = RecoverySchedule()
         self._shift_now = np.zeros(2)
-        self._shift_rate_now = np.zeros(2)  # its rate (m/s), `_run_mpc`
         # The trunk's lean back for a held load now (rad; `TrunkLean`), updated with the MPC.
         self.lean = TrunkLean(robot) if self.s.trunk_lean else None
         self._lean_now = 0.0
@@ -959,8 +958,7 @@ class LocoManipulationController:
         # CoM, and the robot walked off sideways at 0.15-0.2 m/s until it fell (envelope seed
         # 31415, locomotion-013, -038, -039, both strategies; all six succeed with it).
         gain = self._capture_gain if self._last_touchdown(t_td) else self.s.raibert_gain
-        v_want = v_ref[0, :2] + self._shift_rate_now
-        p[:2] += v_c[:2] * stance_time / 2.0 + gain * (v_c[:2] - v_want)
+        p[:2] += v_c[:2] * stance_time / 2.0 + gain * (v_c[:2] - v_ref[0, :2])
         # The CoM's position error fed back as a velocity, closed over a gait period T:
         # wanting v_ref + e / T, the foot lands raibert_gain e / T the other way (the CoM
         # falls away from its foot). Why: the footholds above follow the measured CoM, and
@@ -1075,25 +1073,14 @@ class LocoManipulationController:
             # (`_com_shift`; all of them while standing through it).
             support = (p_all[0, :2] + self._stand_offset, hull)
             standing = np.concatenate(([True], np.cumprod(contact.all(axis=1)).astype(bool)))
-        if loaded:
-            shift = self._com_shift(t_lead, mass_lead, p_all[N + 1 + n_td :], support, standing)
-            # The shift's rate (its rows are the horizon's steps, dt apart): the reference's
-            # velocity is its position's derivative. Why: the shift lies along the load's
-            # direction from the trunk, so a loaded turn carries the shifted CoM reference
-            # round the trunk's axis (7.7 cm for 6 kg held 0.3 m ahead on HECTOR: 0.11 m/s at
-            # a turn's 1.4 rad/s), and with a velocity reference of zero the MPC and the trunk
-            # task lagged it across the turn: HECTOR envelope seed 88021, dynamic
-            # transfer-015 (5.96 kg through a +130 deg turn in 2.4 s) ended its turn 8-12 cm
-            # to the right of its reference with its last step 5.5 cm across from the other
-            # foot, and fell backwards as the drop carried the parcel out.
-            shift_rate = np.gradient(shift, dt, axis=0)
-        else:
-            shift = np.zeros((N + 1, 2))
-            shift_rate = shift
+        shift = (
+            self._com_shift(t_lead, mass_lead, p_all[N + 1 + n_td :], support, standing)
+            if loaded
+            else np.zeros((N + 1, 2))
+        )
         # Updated with the MPC and held in between (it follows the load ramp, about 1 mm per
         # MPC period at most): the footholds below and the trunk task use it.
         self._shift_now = shift[0]
-        self._shift_rate_now = shift_rate[0]
         p_ref, v_ref, yaw_ref, w_ref = p_all[:N], v_all[:N], yaw_all[:N], w_all[:N]
         x_ref = np.zeros((N, 15))
         x_ref[:, 2] = yaw_ref
@@ -1130,7 +1117,6 @@ class LocoManipulationController:
             planned_now = self._planned_object_positions(np.array([t]))[0]
             p_obj = p_obj + (p_hands_mid - planned_now)
         x_ref[:, 3:5] += shift[1:]
-        x_ref[:, 9:11] += shift_rate[1:]
         if self.lean is not None:
             lead_rows = slice(N + 1 + n_td, None)
             lean = self._lean(t, t_lead, mass_lead, pb_all[lead_rows], yaw_all[lead_rows])
@@ -1960,8 +1946,6 @@ class LocoManipulationController:
         else:
             p_des = np.asarray(ref.position, dtype=float).copy()
             p_des[:2] += self._shift_now + self._stand_offset
-            v_des = np.asarray(ref.velocity, dtype=float).copy()
-            v_des[:2] += self._shift_rate_now
             J_t, b_t, a_t, ends = stack_tasks(
                 self._gains,
                 q,
@@ -1969,7 +1953,7 @@ class LocoManipulationController:
                 R,
                 omega_w,
                 p_des,
-                v_des,
+                np.asarray(ref.velocity, dtype=float),
                 float(ref.yaw),
                 -self._lean_now,
                 float(ref.yaw_rate),
