@@ -690,8 +690,16 @@ class LocoManipulationController:
         (`locoplan.robot.arm_range`) a hand pulled in from full reach bends the elbow the
         nominal way instead of straightening it through the singularity and folding it
         backwards onto its stop."""
-        cols, acc = joint_wall_rows(
-            self._cols_wall, self._wall_lower, self._wall_upper, q, v, qdd, self._wall_decel
+        # (`joint_wall_rows`' kernel straight away: the arrays are the right types already.)
+        cols, acc = wbc_kernels.wall_rows(
+            self._cols_wall,
+            self._wall_lower,
+            self._wall_upper,
+            q,
+            v,
+            qdd,
+            self._wall_decel,
+            WALL_TAU,
         )
         if not len(cols):
             return J_t, b_t, a_t, ends, qdd
