@@ -142,15 +142,28 @@ class GraspManager:
             scene.model, mujoco.mjtObj.mjOBJ_BODY, scene.robot.trunk_body
         )
         self._palm_bodies: set[int] = set()
+        # `palm_torques`' per-body constants: the principal inertias and the bond torque's cap
+        # (4/3 m g PALM_RADIUS, module docstring), and the MjData views it reads.
+        self._body_inertia = np.array(m.body_inertia)
+        self._palm_caps = [
+            (4.0 / 3.0) * float(m.body_mass[b]) * GRAVITY * PALM_RADIUS for b in range(m.nbody)
+        ]
+        self._views_of: mujoco.MjData | None = None
+        self._views: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
         self._quat = np.zeros(4)  # `palm_torques`' scratch for MuJoCo's conversions
         self._err = np.zeros(3)
 
     def palm_torques(self, data: mujoco.MjData) -> None:
         """Set the palm-bond torques (module docstring) in `data.xfrc_applied` for every object
-        held by two hands; clear them on the hand bodies once nothing is held."""
-        m = self.scene.model
+        held by two hands; clear them on the hand bodies once nothing is held.
+
+        It runs every control tick: the MjData arrays it reads are taken once per `data`
+        (`_palm_views`: fixed-size views, MuJoCo does not move them) and each object's weight
+        cap once, the arithmetic as written in the module docstring (the same operations in
+        the same order: the torques are the same to the bit)."""
+        xmat, ximat, cvel, xfrc = self._palm_views(data)
         for bid in self._palm_bodies:
-            data.xfrc_applied[bid, 3:6] = 0.0
+            xfrc[bid, 3:6] = 0.0
         self._palm_bodies.clear()
         for hs in self.holds:
             if hs.state != "grasped" or len(hs.hands) != 2:
@@ -160,26 +173,38 @@ class GraspManager:
             if refs is None:
                 continue
             ob = self.scene.object_body_ids[name]
-            hands = [self.scene.hand_body_ids[k] for k in hs.hands]
-            R_obj = data.xmat[ob].reshape(3, 3)
             tb = self._trunk_body
-            R_des = data.xmat[tb].reshape(3, 3) @ refs
+            R_obj = xmat[ob].reshape(3, 3)
+            R_des = xmat[tb].reshape(3, 3) @ refs
             quat, err = self._quat, self._err
             mujoco.mju_mat2Quat(quat, (R_obj @ R_des.T).reshape(9))
             mujoco.mju_quat2Vel(err, quat, 1.0)
-            rate = data.cvel[ob, 0:3] - data.cvel[tb, 0:3]
-            inertia = self._world_inertia(data, ob)
+            rate = cvel[ob, 0:3] - cvel[tb, 0:3]
+            R_i = ximat[ob].reshape(3, 3)
+            inertia = (R_i * self._body_inertia[ob]) @ R_i.T  # `_world_inertia`
             w = self._palm_freq.get(name, PALM_BOND_FREQUENCY)
             torque = -(inertia @ (w * w * err + 2.0 * w * rate))
-            cap = (4.0 / 3.0) * float(m.body_mass[ob]) * GRAVITY * PALM_RADIUS
+            cap = self._palm_caps[ob]
             size = float(np.linalg.norm(torque))
             if size > cap:
                 torque *= cap / size
-            data.xfrc_applied[ob, 3:6] = torque
-            for hb in hands:
-                data.xfrc_applied[hb, 3:6] -= 0.5 * torque
+            xfrc[ob, 3:6] = torque
+            for k in hs.hands:
+                hb = self.scene.hand_body_ids[k]
+                xfrc[hb, 3:6] -= 0.5 * torque
                 self._palm_bodies.add(hb)
             self._palm_bodies.add(ob)
+
+    def _palm_views(
+        self, data: mujoco.MjData
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """`data`'s xmat, ximat, cvel and xfrc_applied, taken once per MjData (each access
+        builds a new view: about 0.5 us apiece, eight a tick)."""
+        views = self._views
+        if views is None or self._views_of is not data:
+            views = (data.xmat, data.ximat, data.cvel, data.xfrc_applied)
+            self._views, self._views_of = views, data
+        return views
 
     def hand_load(self, data: mujoco.MjData) -> float:
         """Vertical force (N, positive up) that the closed grasps exert on the held objects:
