@@ -97,3 +97,25 @@ def test_the_palm_bond_stiffens_for_an_object_gripped_off_its_centre() -> None:
     assert mass * GRAVITY * d / (inertia * w * w) == pytest.approx(PALM_BOND_DEFLECTION, rel=1e-12)
     at_base = mass * GRAVITY * d / (inertia * PALM_BOND_FREQUENCY**2)
     assert math.degrees(at_base) == pytest.approx(25.3, abs=0.1)
+
+
+def test_weld_forces_take_each_welds_third_row_or_nan() -> None:
+    """`hand_load`'s kernel: for each weld (an equality id), the force of its third equality
+    row in row order (a `connect`'s world z row), NaN unless it has exactly three rows; the
+    count of equality rows (0: `hand_load` reads no load at all)."""
+    from locoplan.sim.grasp import _EQUALITY, _weld_forces
+
+    other = _EQUALITY + 1
+    efc_type = np.array([other, _EQUALITY, _EQUALITY, other, _EQUALITY, _EQUALITY, _EQUALITY,
+                         _EQUALITY, _EQUALITY], dtype=np.int32)  # fmt: skip
+    efc_id = np.array([7, 4, 4, 4, 4, 9, 9, 9, 9], dtype=np.int32)
+    efc_force = np.arange(9, dtype=np.float64) * 1.5
+    welds = np.array([4, 9, 12], dtype=np.int64)
+    out = np.zeros(3)
+    assert _weld_forces(efc_type, efc_id, efc_force, _EQUALITY, welds, out) == 7
+    # Weld 4: equality rows 1, 2, 4 (row 3 is another type): the third is row 4. Weld 9: four
+    # rows, not a connect's three: NaN. Weld 12: none.
+    assert out[0] == 6.0
+    assert np.isnan(out[1]) and np.isnan(out[2])
+    none = np.array([other] * 3, dtype=np.int32)
+    assert _weld_forces(none, efc_id[:3], efc_force[:3], _EQUALITY, welds, out) == 0
