@@ -962,7 +962,12 @@ class QpSolver:
                 z_all[S] = lam
                 z_box[box] = z_all[:n_b]
                 z_in = z_all[n_b:]
-                viol = _violation(p, x)
+                # Its largest violation from the row values just formed (every row's value
+                # at x less its value at x_u, against the bounds shifted alike), rather
+                # than forming C x again.
+                viol = max(
+                    float((lower - Wy).max(initial=0.0)), float((Wy - upper).max(initial=0.0))
+                )
                 return self._least_distance_solution(
                     p, t0, x, status, iterations, setup, viol, z_in, z_box
                 )

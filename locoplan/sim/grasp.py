@@ -203,7 +203,7 @@ class GraspManager:
         (`_palm_views`: fixed-size views, MuJoCo does not move them) and each object's weight
         cap once, the arithmetic as written in the module docstring (the same operations in
         the same order: the torques are the same to the bit)."""
-        xmat, ximat, cvel, xfrc = self._palm_views(data)
+        xmat, _, cvel, xfrc = self._palm_views(data)
         for bid in self._palm_bodies:
             xfrc[bid, 3:6] = 0.0
         self._palm_bodies.clear()
@@ -222,8 +222,7 @@ class GraspManager:
             mujoco.mju_mat2Quat(quat, (R_obj @ R_des.T).reshape(9))
             mujoco.mju_quat2Vel(err, quat, 1.0)
             rate = cvel[ob, 0:3] - cvel[tb, 0:3]
-            R_i = ximat[ob].reshape(3, 3)
-            inertia = (R_i * self._body_inertia[ob]) @ R_i.T  # `_world_inertia`
+            inertia = self._world_inertia(data, ob)
             w = self._palm_freq.get(name, PALM_BOND_FREQUENCY)
             torque = -(inertia @ (w * w * err + 2.0 * w * rate))
             cap = self._palm_caps[ob]
@@ -289,9 +288,9 @@ class GraspManager:
     def _world_inertia(self, data: mujoco.MjData, body: int) -> FloatArray:
         """Inertia tensor (3, 3) kg m^2 of `body` about its centre, in world axes (its
         principal axes R_i: R_i diag(I) R_i^T)."""
-        R_i = data.ximat[body].reshape(3, 3)
+        R_i = self._palm_views(data)[1][body].reshape(3, 3)
         # (R_i scaled column-wise: R_i diag(I) without forming the diagonal matrix.)
-        return np.asarray((R_i * self.scene.model.body_inertia[body]) @ R_i.T)
+        return np.asarray((R_i * self._body_inertia[body]) @ R_i.T)
 
     def _bond_frequency(self, name: str, hands: tuple[int, ...], data: mujoco.MjData) -> float:
         """`palm_bond_frequency` of object `name` as the grasp closes: the grip line through
