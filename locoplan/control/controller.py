@@ -53,6 +53,7 @@ from locoplan.control.support import (
 from locoplan.control.swing import min_jerk, smoothstep, smoothstep_array, swing_point
 from locoplan.control.tasks import TaskGains, rot_z, rotation_error
 from locoplan.control.wbc import (
+    TASK_DAMPING,
     WbcOutput,
     WbcSettings,
     WholeBodyQp,
@@ -72,6 +73,8 @@ FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 
 GRAVITY = 9.81
+_GRAVITY_VECTOR = np.array([0.0, 0.0, -GRAVITY])  # (m/s^2, world; read-only)
+_GRAVITY_VECTOR.flags.writeable = False
 LOAD_RAMP = 1.0  # s over which a lifted (or placed) object's weight comes on (goes off)
 # The weight goes off faster than it comes on: the plan lowers the object onto its support
 # only in the last moments before the release, and carrying it while the controller already
@@ -209,12 +212,15 @@ def rigid_pair_targets(targets: FloatArray, p_hands: FloatArray) -> FloatArray:
     target (envelope seeds 4711 and 5000: 6 light boxes ended on the floor). The separation
     is the object's; what the hands can still be asked is where the pair is and how it is
     turned, which keeps it level."""
+    # (Norms as np.linalg.norm forms them for a vector, sqrt(d . d), without its checks:
+    # this runs every tick while two hands hold.)
     d = targets[0] - targets[1]
-    n = float(np.linalg.norm(d))
+    n = math.sqrt(d.dot(d))
     if n < 1e-9:
         return targets
     mid = 0.5 * (targets[0] + targets[1])
-    half = (0.5 * float(np.linalg.norm(p_hands[0] - p_hands[1])) / n) * d
+    span = p_hands[0] - p_hands[1]
+    half = (0.5 * math.sqrt(span.dot(span)) / n) * d
     return np.array([mid + half, mid - half])
 
 
@@ -231,7 +237,7 @@ def rigid_pair_velocities(velocities: FloatArray, gap: FloatArray) -> FloatArray
     shoulder rolls ran to 0.9 of their limit 10-20 ms before the release, the legs pushed
     324 N (the WBC planned 106), and the robot left the ground 5 cm and fell on landing
     (HECTOR envelope seed 89021, quasi-static throw-019: 1.73 kg at 2.2 m/s)."""
-    n = float(np.linalg.norm(gap))
+    n = math.sqrt(gap.dot(gap))  # np.linalg.norm's arithmetic (`rigid_pair_targets`)
     if n < 1e-9:
         return velocities
     u = gap / n
@@ -679,38 +685,45 @@ class LocoManipulationController:
         b_t: FloatArray,
         a_t: FloatArray,
         ends: npt.NDArray[np.int64],
-        qdd: FloatArray,
         q: FloatArray,
         v: FloatArray,
-    ) -> tuple[FloatArray, FloatArray, FloatArray, npt.NDArray[np.int64], FloatArray]:
-        """The task stack with a first level that stops each joint `qdd` would drive through
-        its working bound (`joint_wall_rows`), and the accelerations
-        solved again under it; the stack and `qdd` unchanged when no joint is driven there.
+    ) -> tuple[FloatArray, FloatArray]:
+        """The task stack's accelerations (`prioritized_rows` on J_t, a_t - b_t, ends) under a
+        first level that stops each joint they would drive through its working bound
+        (`joint_wall_rows`), solved again under it; and the stack's rows with that level on
+        top (J_t unchanged when no joint is driven there), for the posture's null space.
         The hands then follow their targets as far as the rest of the arm allows: on H1
         (`locoplan.robot.arm_range`) a hand pulled in from full reach bends the elbow the
         nominal way instead of straightening it through the singularity and folding it
-        backwards onto its stop."""
-        # (`joint_wall_rows`' kernel straight away: the arrays are the right types already.)
-        cols, acc = wbc_kernels.wall_rows(
-            self._cols_wall,
-            self._wall_lower,
-            self._wall_upper,
-            q,
-            v,
-            qdd,
-            self._wall_decel,
-            WALL_TAU,
-        )
-        if not len(cols):
-            return J_t, b_t, a_t, ends, qdd
+        backwards onto its stop.
+
+        One compiled call (`wbc_kernels.prioritized_walled`: the two solves and the wall,
+        the same arithmetic as three calls and numpy's stacking, so the same values to the
+        bit); the walled rows are stacked here only where a posture task needs them."""
+        try:
+            qdd, cols, _ = wbc_kernels.prioritized_walled(
+                J_t,
+                a_t,
+                b_t,
+                ends,
+                TASK_DAMPING,
+                self._cols_wall,
+                self._wall_lower,
+                self._wall_upper,
+                q,
+                v,
+                self._wall_decel,
+                WALL_TAU,
+            )
+        except np.linalg.LinAlgError:
+            # Not positive definite: cannot happen with finite data (`prioritized_rows`).
+            return J_t, np.full(J_t.shape[1], np.nan)
         n = len(cols)
-        rows = np.zeros((n, J_t.shape[1]))
-        rows[np.arange(n), cols] = 1.0
-        J_t = np.vstack((rows, J_t))
-        b_t = np.concatenate((np.zeros(n), b_t))
-        a_t = np.concatenate((acc, a_t))
-        ends = np.concatenate(([n], ends + n)).astype(np.int64)
-        return J_t, b_t, a_t, ends, prioritized_rows(J_t, a_t - b_t, ends)
+        if n and len(self._cols_posture):
+            rows = np.zeros((n, J_t.shape[1]))
+            rows[np.arange(n), cols] = 1.0
+            J_t = np.vstack((rows, J_t))
+        return J_t, qdd
 
     # -- set-up --------------------------------------------------------------------------------
     def _nominal_geometry(self) -> None:
@@ -1966,11 +1979,10 @@ class LocoManipulationController:
                 np.ascontiguousarray(dJv_fr[2:4, :3]),
                 hand_acc,
             )
-            qdd_cmd = prioritized_rows(J_t, a_t - b_t, ends)
             if len(self._cols_wall):
-                J_t, b_t, a_t, ends, qdd_cmd = self._keep_in_working_range(
-                    J_t, b_t, a_t, ends, qdd_cmd, q, v
-                )
+                J_t, qdd_cmd = self._keep_in_working_range(J_t, b_t, a_t, ends, q, v)
+            else:
+                qdd_cmd = prioritized_rows(J_t, a_t - b_t, ends)
             if len(self._cols_posture):
                 # Lowest priority: the posture of the joints no task above determines.
                 a_p = posture_acceleration(
@@ -2070,8 +2082,13 @@ class LocoManipulationController:
             return tau_ext
         # A rigid object held at the hand points moves with their mean; the hands' difference
         # (the squeeze) only makes internal force and must not be fed forward as inertia.
-        a_obj = np.mean([hand_acc[k] for k in hands], axis=0)
-        f = mass / len(hands) * (np.array([0.0, 0.0, -GRAVITY]) - a_obj)
+        # (The mean as np.mean forms it, the sum over the hands over their number, without
+        # building an array of the rows first.)
+        a_obj = hand_acc[hands[0]]
+        for k in hands[1:]:
+            a_obj = a_obj + hand_acc[k]
+        a_obj = a_obj / len(hands)
+        f = mass / len(hands) * (_GRAVITY_VECTOR - a_obj)
         for k in hands:
             tau_ext += J_hands[k].T.dot(f)
         return tau_ext

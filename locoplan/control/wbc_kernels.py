@@ -426,6 +426,50 @@ def wall_rows(
     return hit[:n].copy(), acc[:n].copy()
 
 
+@njit(cache=True)
+def prioritized_walled(
+    J: FloatArray,
+    a: FloatArray,
+    b: FloatArray,
+    ends: npt.NDArray[np.int64],
+    damping: float,
+    cols: npt.NDArray[np.intp],
+    lower: FloatArray,
+    upper: FloatArray,
+    q: FloatArray,
+    v: FloatArray,
+    decel: FloatArray,
+    tau: float,
+) -> tuple[FloatArray, npt.NDArray[np.intp], FloatArray]:
+    """The task stack's accelerations under the working-range wall in one call: `prioritized`
+    on rows J with r = a - b, then `wall_rows` on that qdd, and where it walls joints,
+    `prioritized` again on the stack with those joints' rows (a unit row each, r its wall
+    acceleration) as the first level. Returns (qdd, walled columns, their accelerations).
+
+    What the controller did with three calls and the stacking in numpy (`LocoManipulation
+    Controller._keep_in_working_range`), the same operations in the same order (the wall
+    rows' r is acc - 0, as the stacked b's zeros gave), so the same qdd to the bit; one
+    call saves the second kernel's dispatch and its boxed results, 2-3 us of a 60 us tick."""
+    r = a - b
+    qdd = prioritized(J, r, ends, damping)
+    hit, acc = wall_rows(cols, lower, upper, q, v, qdd, decel, tau)
+    n = hit.shape[0]
+    if n == 0:
+        return qdd, hit, acc
+    rows, nv = J.shape
+    Jw = np.zeros((n + rows, nv))
+    rw = np.empty(n + rows)
+    for i in range(n):
+        Jw[i, hit[i]] = 1.0
+        rw[i] = acc[i] - 0.0
+    Jw[n:] = J
+    rw[n:] = r
+    ends_w = np.empty(ends.shape[0] + 1, dtype=np.int64)
+    ends_w[0] = n
+    ends_w[1:] = ends + n
+    return prioritized(Jw, rw, ends_w, damping), hit, acc
+
+
 def warm_up(nv: int) -> None:
     """Compile (or load from the cache) every kernel for the argument types the controller
     passes, on a small well-posed problem, so that the first control tick does not pay for
@@ -484,4 +528,7 @@ def warm_up(nv: int) -> None:
     cols = np.array([NV_BASE], dtype=np.intp)
     one = np.ones(1)
     wall_rows(cols, one, one, np.zeros(nv + 1), np.zeros(nv), np.zeros(nv), one, 0.05)
+    prioritized_walled(
+        Jt, a, b, ends, 1e-6, cols, one, one, np.zeros(nv + 1), np.zeros(nv), one, 0.05
+    )
     qp.warm_up()
