@@ -1998,15 +1998,12 @@ class LocoManipulationController:
             w5 = np.zeros(5 * len(idx))
             for i, k in enumerate(idx):
                 w5[5 * i : 5 * i + 5] = wrench_world_to_w5(float(yaw_feet[k]), wrench[k])
-            wbc_out = self.wbc.solve_arrays(
-                M,
-                h,
-                qdd_cmd,
-                J_feet[idx].reshape(-1, J_feet.shape[2]),
-                yaw_feet[idx],
-                w5,
-                tau_ext,
-            )
+            if len(idx) == 2:
+                # Both feet: the arrays as they are (J_feet's rows stacked are a view).
+                Jc, yaw_c = J_feet.reshape(-1, J_feet.shape[2]), yaw_feet
+            else:
+                Jc, yaw_c = J_feet[idx].reshape(-1, J_feet.shape[2]), yaw_feet[idx]
+            wbc_out = self.wbc.solve_arrays(M, h, qdd_cmd, Jc, yaw_c, w5, tau_ext)
             tau = wbc_out.tau
         wbc_time = time.perf_counter() - t_w
         # (np.minimum / np.maximum: np.clip costs several times more on a few values.)
