@@ -469,13 +469,26 @@ def test_lift_feed_forward_has_the_whole_weight_from_the_planned_lift_off() -> N
     from the lift-off to LOAD_RAMP after it the whole mass even with nothing measured yet
     (the box still on its table); a larger measurement wins; after the window the
     measurement alone. A pick with nothing stepping within LOAD_RAMP of its lift-off (the
-    standing hold) takes the measurement alone throughout."""
+    standing hold) takes the measurement alone throughout; for a heavy one (10 kg: the
+    planner's `slow_lift`) no more than the plan's ramp from the lift-off for LOAD_RAMP (mass
+    times smoothstep: none at the lift-off, half at its middle)."""
     desc = load_robot_description("hector")
     standing = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK))
     ctl = LocoManipulationController(PinocchioRobot(desc), desc, standing)
     (hold,) = standing.holds
+    assert not hold.slow_lift
     for t in (hold.grasp + 0.01, hold.lift, hold.lift + 0.5 * LOAD_RAMP):
         assert ctl._lift_mass(t, 0.2) == 0.2
+    heavy = compile_plan(scenario_from_text(HOLD_AND_PUT_BACK.replace("mass: 5.0", "mass: 10.0")))
+    ctl = LocoManipulationController(PinocchioRobot(desc), desc, heavy)
+    (hold,) = heavy.holds
+    assert hold.slow_lift
+    assert ctl._lift_mass(hold.grasp + 0.01, 0.2) == 0.2
+    assert ctl._lift_mass(hold.lift, 0.2) == 0.0
+    half = hold.lift + 0.5 * LOAD_RAMP
+    assert ctl._lift_mass(half, 0.2) == 0.2
+    assert ctl._lift_mass(half, hold.mass) == pytest.approx(0.5 * hold.mass, abs=1e-12)
+    assert ctl._lift_mass(hold.lift + LOAD_RAMP + 1e-3, 1.1 * hold.mass) == 1.1 * hold.mass
     turning = HOLD_AND_PUT_BACK.replace(
         "{action: stand, start: 2.0, duration: 2.0}",
         "{action: turn, angle: 20, start: 2.0, duration: 1.5}",

@@ -49,6 +49,24 @@ def test_a_short_heavy_standing_pick_lasts_the_minimum_with_a_note() -> None:
         in n
         for n in plan.notes
     ), plan.notes
+    # The time it was given is for the weight to come on slowly: the controller feeds the
+    # hands no more of it than the load ramp has come to (`ObjectHold.slow_lift`).
+    (hold,) = plan.holds
+    assert hold.slow_lift
+
+
+def test_a_heavy_pick_followed_by_a_turn_is_not_slow_lifted() -> None:
+    """Where the robot steps while holding, the lean is in place before the lift-off and the
+    weight comes on at once (`_lift_mass`'s first case): no slow lift for 8 kg (heavy: see
+    the stand's case above)."""
+    text = hold_script(8.0).replace(
+        "{action: stand, start: 2.5, duration: 3.0}",
+        "{action: turn, angle: 20, start: 2.5, duration: 1.5}\n"
+        "  - {action: turn, angle: -20, start: 4.0, duration: 1.5}",
+    )
+    assert "action: turn" in text
+    (hold,) = compile_plan(scenario_from_text(text)).holds
+    assert not hold.slow_lift
 
 
 @pytest.mark.parametrize(
@@ -62,6 +80,8 @@ def test_a_pick_is_left_as_written(mass: float, drop_at: float, why: str) -> Non
     plan = compile_plan(scenario_from_text(_short(mass, drop_at)))
     assert plan.tasks[1].end == pytest.approx(1.5), why
     assert not any(n.startswith("the pick of") for n in plan.notes)
+    # Light, or picked in 1 s: the weight comes on as the hands take it.
+    assert not any(h.slow_lift for h in plan.holds)
 
 
 @pytest.mark.closed_loop

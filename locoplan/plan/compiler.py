@@ -12,7 +12,7 @@ from locoplan.plan.events import PlanEvent, sort_events
 from locoplan.plan.footholds import build_footholds
 from locoplan.plan.gait import FOOT_NAMES, build_contact_schedule
 from locoplan.plan.hands import HandSegment
-from locoplan.plan.manipulation import build_manipulation
+from locoplan.plan.manipulation import ObjectHold, build_manipulation
 from locoplan.plan.payload import (
     behind_grips,
     centre_grips,
@@ -599,7 +599,7 @@ def _compile_tasks(
         plan = _face_the_drop(scenario, plan, plan.notes[len(base_notes) :], exc, build, geometry)
     plan = _hover_within_reach(plan, scenario, build, base_notes)
     check_payload(plan, scenario.robot)
-    return with_pre_leans(plan, scenario.robot)
+    return _with_slow_lifts(with_pre_leans(plan, scenario.robot), scenario.robot)
 
 
 def _hover_within_reach(
@@ -1014,10 +1014,10 @@ HEAVY_PICK_MIN = 2.0
 def _slow_heavy_standing_picks(
     scenario: Scenario, tasks: tuple[PlannedTask, ...], plan: Plan
 ) -> tuple[tuple[PlannedTask, ...], tuple[str, ...]]:
-    """The tasks with each pick of a heavy object held standing that is written shorter than
-    HEAVY_PICK_MIN lasting that long (same start), where only stand tasks start before its new
-    end, and a note for each."""
-    from locoplan.plan.hand_paths import heavy_pull, world_to_trunk
+    """The tasks with each pick of a heavy object held standing (`_heavy_standing`) that is
+    written shorter than HEAVY_PICK_MIN lasting that long (same start), where only stand tasks
+    start before its new end, and a note for each."""
+    from locoplan.plan.hand_paths import world_to_trunk
 
     if not plan.holds:
         return tasks, ()
@@ -1028,18 +1028,11 @@ def _slow_heavy_standing_picks(
         pick = by_index[hold.pick_task]
         if pick.duration >= HEAVY_PICK_MIN - 1e-9:
             continue
-        until = hold.release if math.isfinite(hold.release) else math.inf
-        release = by_index.get(hold.release_task) if hold.release_task is not None else None
-        if release is not None:
-            until = max(until, release.end)
-        if any(t.kind == "locomotion" and t.start < until and t.end > pick.start for t in tasks):
+        if not _heavy_standing(tasks, plan, hold, leg):
             continue
         grip = _task_segment(plan, pick.index, "grip")
-        if grip is None or grip.end.frame != "world":
-            continue
+        assert grip is not None  # (`_heavy_standing` found it)
         ahead = world_to_trunk(plan.trunk, grip.t1, grip.end.point)[0]
-        if not heavy_pull(hold.mass, ahead, leg):
-            continue
         end = pick.start + HEAVY_PICK_MIN
         if any(
             t.index != pick.index and t.kind != "stand" and pick.start <= t.start < end
@@ -1060,6 +1053,53 @@ def _slow_heavy_standing_picks(
     if not notes:
         return tasks, ()
     return tuple(by_index[t.index] for t in tasks), tuple(notes)
+
+
+def _heavy_standing(
+    tasks: tuple[PlannedTask, ...], plan: Plan, hold: ObjectHold, leg: float
+) -> bool:
+    """Whether `hold` picks a heavy object (`hand_paths.heavy_pull` for the robot's hip pitch
+    torque `leg`, N m, at its world grip point's distance ahead of the trunk) that the robot
+    holds standing: no locomotion task from the pick's start to its release (or the release
+    task's end)."""
+    from locoplan.plan.hand_paths import heavy_pull, world_to_trunk
+
+    by_index = {t.index: t for t in tasks}
+    pick = by_index[hold.pick_task]
+    until = hold.release if math.isfinite(hold.release) else math.inf
+    release = by_index.get(hold.release_task) if hold.release_task is not None else None
+    if release is not None:
+        until = max(until, release.end)
+    if any(t.kind == "locomotion" and t.start < until and t.end > pick.start for t in tasks):
+        return False
+    grip = _task_segment(plan, pick.index, "grip")
+    if grip is None or grip.end.frame != "world":
+        return False
+    ahead = world_to_trunk(plan.trunk, grip.t1, grip.end.point)[0]
+    return heavy_pull(hold.mass, ahead, leg)
+
+
+def _with_slow_lifts(plan: Plan, robot: str) -> Plan:
+    """`plan` with `ObjectHold.slow_lift` set on each heavy object held standing
+    (`_heavy_standing`, not thrown) whose pick lasts HEAVY_PICK_MIN or more (as written or
+    as `_slow_heavy_standing_picks` made it): the picks the planner gave the time for the
+    weight to come on slowly. The controller then feeds the hands no more of the weight than
+    the load ramp has come to (`LocoManipulationController._lift_mass`)."""
+    if not plan.holds:
+        return plan
+    leg = _leg_torque(robot)
+    by_index = {t.index: t for t in plan.tasks}
+    holds = tuple(
+        replace(h, slow_lift=True)
+        if h.release_kind != "throw"
+        and by_index[h.pick_task].duration >= HEAVY_PICK_MIN - 1e-9
+        and _heavy_standing(plan.tasks, plan, h, leg)
+        else h
+        for h in plan.holds
+    )
+    if holds == plan.holds:
+        return plan
+    return replace(plan, manipulation=replace(plan.manipulation, holds=holds))
 
 
 def _task_segment(plan: Plan, task: int, label: str) -> HandSegment | None:

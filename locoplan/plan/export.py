@@ -131,6 +131,7 @@ def plan_to_dict(plan: Plan, reference_dt: float = 0.02) -> dict[str, Any]:
                 "release_kind": h.release_kind,
                 "pre_lean": h.pre_lean,
                 "grip_behind": h.grip_behind,
+                "slow_lift": h.slow_lift,
             }
             for h in plan.holds
         ],

@@ -103,7 +103,10 @@ class ObjectHold:
     the lift-off, the controller leans back before the load comes on by the equal-margin
     share of the shift, at most this far; 0 until the compiler sets it. `grip_behind` (m): how
     far nearer the robot than the object's centre the hands hold it, across the line between
-    them (`hand_paths.grip_behind`; 0 for a centre grip).
+    them (`hand_paths.grip_behind`; 0 for a centre grip). `slow_lift`: a heavy object held
+    standing whose pick lasts at least `compiler.HEAVY_PICK_MIN` (`compiler._with_slow_lifts`):
+    its weight is to come onto the hands no faster than the load ramp, so that the robot's
+    lean back follows it (the controller's `_lift_mass`); False until the compiler sets it.
     """
 
     object: str
@@ -121,6 +124,7 @@ class ObjectHold:
     carry_top: float = 0.0
     pre_lean: float = 0.0
     grip_behind: float = 0.0
+    slow_lift: bool = False
 
 
 @dataclass(frozen=True, slots=True)
