@@ -169,3 +169,25 @@ def test_fast_encoder_with_decimals_matches_the_reference(
     fast = _strict_loads(make_json_encoder(decimals)(payload))
     reference = json.loads(json.dumps(to_jsonable(payload, decimals), allow_nan=False))
     assert _same(fast, reference)
+
+
+# Payloads of a few "topics": each group shares its keys, as a topic's payloads do.
+_topic_payloads = st.lists(st.text(max_size=3), max_size=4, unique=True).flatmap(
+    lambda keys: st.lists(st.fixed_dictionaries({k: top_values for k in keys}), max_size=4)
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(_topic_payloads, max_size=3).flatmap(
+        lambda groups: st.permutations([p for group in groups for p in group])
+    ),
+    st.sampled_from([None, 0, 6]),
+)
+def test_batch_encoding_writes_each_payloads_bytes(
+    payloads: list[dict[str, Any]], decimals: int | None
+) -> None:
+    """`many` (column by column, the float arrays in one compiled call) writes the bytes one
+    call per payload writes, in order."""
+    encode = make_json_encoder(decimals)
+    assert encode.many(payloads) == [encode(p) for p in payloads]

@@ -66,3 +66,22 @@ def test_views_and_read_only_arrays() -> None:
         text = rounded_json(view, 6)
         assert text is not None
         assert _same_bits(json.loads(text), _expected(view, 6))
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.lists(
+        hnp.arrays(
+            np.float64,
+            hnp.array_shapes(min_dims=1, max_dims=4, min_side=0, max_side=4),
+            elements=values,
+        ),
+        max_size=6,
+    ),
+    st.integers(0, 9),
+)
+def test_many_writes_what_one_call_each_writes(arrays: list[np.ndarray], decimals: int) -> None:
+    """The batch (one kernel call) gives each array's bytes, None where `__call__` gives None
+    (too large, empty, 4-D) without shifting the texts after it."""
+    encode = RoundedJson(decimals)
+    assert encode.many(arrays) == [encode(a) for a in arrays]

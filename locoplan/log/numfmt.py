@@ -11,10 +11,14 @@ more than 3 dimensions, `rounded_json` returns None and the caller formats the a
 way.
 
 Python spends most of a JSON encoding printing floats one by one (about 0.35 us each); this
-writes an MPC plan of 330 numbers in a few microseconds.
+writes an MPC plan of 330 numbers in a few microseconds. `RoundedJson.many` writes a batch of
+arrays in one call (a writer's queue holds hundreds of small ones, and each call from Python
+costs about 1 us around the kernel).
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -43,23 +47,29 @@ def _write_int(buf: npt.NDArray[np.uint8], pos: int, value: int) -> int:
 
 # Explicit signatures: compiled (or loaded from the cache) at import, and an argument of
 # another type is an error rather than a compilation in the middle of a run.
-@njit("uint8[::1](float64[::1], int64, int64, int64, int64, float64, int64)", cache=True)
-def _format(
+@njit(
+    "int64(uint8[::1], int64, float64[::1], int64, int64, int64, int64, int64, int64, float64,"
+    " int64)",
+    cache=True,
+)
+def _write_array(
+    buf: npt.NDArray[np.uint8],
+    pos: int,
     flat: npt.NDArray[np.float64],
+    start: int,
+    n: int,
     ndim: int,
     size1: int,
     size2: int,
     decimals: int,
     scale: float,
     power: int,
-) -> npt.NDArray[np.uint8]:
-    """JSON text (ASCII bytes) of `flat` (C order) as nested lists, `ndim` (1 to 3) deep, a
-    depth-1 list holding `size1` numbers and a depth-2 list `size2`; an empty array when a
-    value is too large for the exact path."""
-    n = flat.size
-    # Per number: sign, 16 integer digits, point, decimals, comma; brackets: 2 per list.
-    buf = np.empty(n * (20 + decimals) + 2 * n * ndim + 2 * ndim + 8, dtype=np.uint8)
-    pos = 0
+) -> int:
+    """Write the JSON text of ``flat[start:start + n]`` (C order) at `pos` as nested lists,
+    `ndim` (1 to 3) deep, a depth-1 list holding `size1` numbers and a depth-2 list `size2`;
+    returns the position after it, or -1 when a value is too large for the exact path (what
+    was written from `pos` on is then garbage). `buf` needs `_bound(n, ndim, decimals)` bytes
+    from `pos`."""
     for _ in range(ndim):
         buf[pos] = 91  # [
         pos += 1
@@ -78,7 +88,7 @@ def _format(
             for _ in range(c):
                 buf[pos] = 91
                 pos += 1
-        v = flat[i]
+        v = flat[start + i]
         if not np.isfinite(v):
             buf[pos] = 110  # null
             buf[pos + 1] = 117
@@ -88,7 +98,7 @@ def _format(
             continue
         k = np.rint(v * scale)
         if abs(k) >= _EXACT_LIMIT:
-            return np.empty(0, dtype=np.uint8)
+            return -1
         if k < 0.0 or (k == 0.0 and np.signbit(k)):
             buf[pos] = 45  # -
             pos += 1
@@ -115,7 +125,81 @@ def _format(
     for _ in range(ndim):
         buf[pos] = 93
         pos += 1
+    return pos
+
+
+@njit("int64(int64, int64, int64)", cache=True)
+def _bound(n: int, ndim: int, decimals: int) -> int:
+    """Bytes `_write_array` may need: per number sign, 16 integer digits, point, decimals and
+    comma; brackets, 2 per list."""
+    return n * (20 + decimals) + 2 * n * ndim + 2 * ndim + 8
+
+
+@njit("uint8[::1](float64[::1], int64, int64, int64, int64, float64, int64)", cache=True)
+def _format(
+    flat: npt.NDArray[np.float64],
+    ndim: int,
+    size1: int,
+    size2: int,
+    decimals: int,
+    scale: float,
+    power: int,
+) -> npt.NDArray[np.uint8]:
+    """JSON text (ASCII bytes) of `flat` (C order) as nested lists (see `_write_array`); an
+    empty array when a value is too large for the exact path."""
+    n = flat.size
+    buf = np.empty(_bound(n, ndim, decimals), dtype=np.uint8)
+    pos = _write_array(buf, 0, flat, 0, n, ndim, size1, size2, decimals, scale, power)
+    if pos < 0:
+        return np.empty(0, dtype=np.uint8)
     return buf[:pos]
+
+
+@njit(
+    "Tuple((uint8[::1], int64[::1]))(float64[::1], int64[::1], int64, float64, int64)",
+    cache=True,
+)
+def _format_many(
+    flat: npt.NDArray[np.float64],
+    spec: npt.NDArray[np.int64],
+    decimals: int,
+    scale: float,
+    power: int,
+) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.int64]]:
+    """The JSON texts of many arrays in one call, one after the other in one buffer.
+
+    `flat` holds the arrays' values one after the other (each in C order); `spec` four
+    numbers per array: its size, ndim, size1 and size2 (see `_write_array`). Returns the
+    buffer and, per array, where its text ends, or -1 when a value is too large for the exact
+    path (that array then has no text: the next one starts where the previous one ended)."""
+    k = spec.size // 4
+    total = 0
+    for j in range(k):
+        total += _bound(spec[4 * j], spec[4 * j + 1], decimals)
+    buf = np.empty(total, dtype=np.uint8)
+    ends = np.empty(k, dtype=np.int64)
+    pos = 0
+    start = 0
+    for j in range(k):
+        n = spec[4 * j]
+        end = _write_array(
+            buf,
+            pos,
+            flat,
+            start,
+            n,
+            spec[4 * j + 1],
+            spec[4 * j + 2],
+            spec[4 * j + 3],
+            decimals,
+            scale,
+            power,
+        )
+        if end >= 0:
+            pos = end
+        ends[j] = end
+        start += n
+    return buf[:pos], ends
 
 
 class RoundedJson:
@@ -140,6 +224,40 @@ class RoundedJson:
         size1 = shape[1] * shape[2] if ndim == 3 else shape[-1]
         out = _format(flat, ndim, size1, shape[-1], self.decimals, self._scale, self._power)
         return out.tobytes() if out.size else None
+
+    def many(self, arrays: Sequence[npt.NDArray[np.float64]]) -> list[bytes | None]:
+        """``[self(a) for a in arrays]``, the same bytes, in one compiled call.
+
+        Each call of `__call__` costs about 1 us of Python and dispatch around the kernel
+        (more than the kernel itself for the closed loop's arrays of 3 to 30 numbers); a
+        writer's batch of queued payloads holds a few hundred arrays, so they are written
+        together: their values joined into one buffer, one kernel call, then one slice each.
+        """
+        out: list[bytes | None] = [None] * len(arrays)
+        used: list[npt.NDArray[np.float64]] = []
+        where: list[int] = []  # index in `arrays` of each of `used`
+        spec: list[int] = []  # per used array: size, ndim, size1, size2 (see `_format_many`)
+        for i, a in enumerate(arrays):
+            ndim = a.ndim
+            if a.size == 0 or not 1 <= ndim <= 3:
+                continue
+            shape = a.shape
+            spec += (a.size, ndim, shape[1] * shape[2] if ndim == 3 else shape[-1], shape[-1])
+            used.append(a)
+            where.append(i)
+        if not used:
+            return out
+        flat = np.concatenate(used, axis=None)  # a new C-ordered float64 buffer
+        buf, ends = _format_many(
+            flat, np.array(spec, dtype=np.int64), self.decimals, self._scale, self._power
+        )
+        text = buf.tobytes()
+        start = 0
+        for i, end in zip(where, ends.tolist(), strict=True):
+            if end >= 0:  # -1: a value too large for the exact path (None, as `__call__`)
+                out[i] = text[start:end]
+                start = end
+        return out
 
 
 def rounded_json(a: npt.NDArray[np.float64], decimals: int) -> bytes | None:

@@ -63,7 +63,9 @@ RESERVED_METADATA_KEYS = frozenset(
 )
 
 _FramePairs = tuple[tuple[str, ...], tuple[str, ...]]  # parent frames, child frames
-_Encode = Callable[[], bytes]  # a queued message, encoded when the queue is drained
+# A queued message, encoded when the queue is drained: a function returning its bytes, or a
+# JSON payload (a dict of copied values), encoded with the other queued payloads in one batch.
+_Encode = Callable[[], bytes] | dict[str, Any]
 
 # Queued messages are encoded in batches of this many (see `RunLogWriter._emit`).
 PENDING_LIMIT = 256
@@ -518,7 +520,8 @@ class RunLogWriter:
         return ns
 
     def _emit(self, channel: foxglove.Channel, ns: int, message: bytes | _Encode) -> None:
-        """Queue one message (bytes, or a function encoding it from copies of its values).
+        """Queue one message (bytes, a function encoding it from copies of its values, or a
+        copied JSON payload).
 
         Messages are encoded and handed to the SDK in batches, in call order: every
         `PENDING_LIMIT` messages and before each flush, `finish` and close. Between control
@@ -537,15 +540,24 @@ class RunLogWriter:
             self._flush_due = now + self._flush_interval_s
 
     def _drain(self) -> None:
-        """Encode the queued messages and hand them to the SDK, in order."""
+        """Encode the queued messages and hand them to the SDK, in order (the JSON payloads
+        first, all together: `JsonEncoder.many` prints their arrays in one compiled call)."""
         pending, self._pending = self._pending, []
+        payloads = [message for _, _, message in pending if isinstance(message, dict)]
+        texts = iter(self._encode_json.many(payloads))
         for base, ns, message in pending:
-            base.log(message if isinstance(message, bytes) else message(), ns)
+            if isinstance(message, dict):
+                data = next(texts)
+            elif isinstance(message, bytes):
+                data = message
+            else:
+                data = message()
+            base.log(data, ns)
 
     def _json_message(self, payload: Mapping[str, Any]) -> bytes | _Encode:
-        """What `_emit` queues for a JSON payload: its encoding later, from a copy, when the
-        payload holds only scalars, strings, numpy arrays and flat lists of scalars (what
-        the closed loop writes); its bytes now otherwise (nested containers, objects: an
+        """What `_emit` queues for a JSON payload: a copy, encoded when the queue is drained,
+        when the payload holds only scalars, strings, numpy arrays and flat lists of scalars
+        (what the closed loop writes); its bytes now otherwise (nested containers, objects: an
         unsupported value raises here, at the caller)."""
         copy: dict[str, Any] = {}
         for key, value in payload.items():
@@ -561,7 +573,7 @@ class RunLogWriter:
             elif kind not in _SCALARS or type(key) is not str:
                 return self._encode_json(payload)
             copy[key] = value
-        return functools.partial(self._encode_json, copy)
+        return copy
 
     def _proto_channel(self, topic: str, message_type: Any) -> foxglove.Channel:
         """A channel for the protobuf encoding of a Foxglove message type (its schema record
