@@ -806,7 +806,11 @@ class MultiContactMpc:
         lost standing holds in the envelope (seeds 46021, 49021). Levers from the
         reference at step 0 too lost them as well. "stepping" (the reference's levers while
         both feet stand throughout) kept the holds, but paired on fresh seed 50021 it gave
-        390 of 400 against 395, and it fails a recovery-step push test.
+        390 of 400 against 395, and it fails a recovery-step push test. Tried again once heavy
+        standing holds lifted slowly (`ObjectHold.slow_lift`): "predicted" then held the 11
+        heaviest standing holds of seed 89021 (11.5-14 kg) and mended HECTOR 91021's
+        quasi-static walk-carry-029, but H1 seed 81027 lost locomotion-018 (walk, two turns,
+        walk) and neither 89021's walk-carry-024 nor 81027's locomotion-007 improved.
         """
         levers = self.settings.levers
         if levers == "reference" or self._prev_com is None:
