@@ -17,8 +17,9 @@ Topics (all at simulation time, scene topics as foxglove.SceneUpdate, the rest J
 Foxglove resolves a scene entity's frame at the entity's timestamp and keeps it there (the
 SDK's entities are not frame-locked), so the moving topics are re-published on a fixed grid,
 `scene_period` (default 1/30 s, the video's rate); the robot's entities are encoded once
-(`locoplan.log.scene.prepare_scene`) and only re-stamped. Measured cost on this machine: see
-`ViewLogger.sample`.
+(`locoplan.log.scene.prepare_scene`) and only re-stamped, and what the other moving entities
+take from the model (ids, sizes, colours, sites) is looked up once per run (`ObjectItems`,
+`ViewLogger`). Measured cost on this machine: see `ViewLogger.sample`.
 """
 
 from __future__ import annotations
@@ -32,10 +33,13 @@ import numpy.typing as npt
 
 from locoplan.log import topics
 from locoplan.log.scene import (
+    Arrow,
+    Box,
+    LineStrip,
     Rgba,
     SceneItem,
+    Sphere,
     box,
-    force_arrow,
     line_strip,
     prepare_scene,
     sphere,
@@ -52,11 +56,21 @@ SCENE_MPC = "/scene/mpc"
 TORQUE_RATIO = "/robot/torque_ratio"
 VISIBLE_GROUPS = 3  # MuJoCo draws geom groups 0..2 by default; group 3+ is hidden detail
 CONTACT_MIN_N = 1.0  # N: below this a foot is not drawn as carrying load
+CONTACT_M_PER_N = 0.002  # m per N: a contact arrow's length per newton (force_arrow's default)
 FOOTHOLD_WIDTH = 0.05  # m, drawn foothold width (the sole is a line of three spheres)
 FOOTHOLD_THICKNESS = 0.002  # m
 FOOT_COLORS = (Rgba(0.2, 0.75, 0.3, 0.6), Rgba(0.2, 0.4, 0.9, 0.6))  # left green, right blue
 MPC_COLOR = Rgba(0.85, 0.1, 0.6, 1.0)
 FIXTURE_COLOR = Rgba(0.55, 0.4, 0.25, 1.0)
+MPC_THICKNESS = 0.01  # m, the CoM prediction's line (line_strip's default)
+
+# MuJoCo's geom types as plain ints: looking up an `mjtGeom` member and comparing with it costs
+# about a microsecond, an int comparison a few tens of nanoseconds.
+_BOX = int(mujoco.mjtGeom.mjGEOM_BOX)
+_SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
+_ELLIPSOID = int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)
+_CAPSULE = int(mujoco.mjtGeom.mjGEOM_CAPSULE)
+_CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
 
 
 def _xyzw(quat_wxyz: npt.ArrayLike) -> tuple[float, float, float, float]:
@@ -87,7 +101,7 @@ def geom_items(
     size = m.geom_size[g]
     color = _rgba(m, g)
     gtype = int(m.geom_type[g])
-    if gtype == mujoco.mjtGeom.mjGEOM_BOX:
+    if gtype == _BOX:
         return [
             box(
                 entity_id,
@@ -98,11 +112,11 @@ def geom_items(
                 frame_id=frame_id,
             )
         ]
-    if gtype == mujoco.mjtGeom.mjGEOM_SPHERE:
+    if gtype == _SPHERE:
         return [sphere(entity_id, position, 2.0 * size[0], color=color, frame_id=frame_id)]
-    if gtype == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
+    if gtype == _ELLIPSOID:
         return [sphere(entity_id, position, 2.0 * max(size), color=color, frame_id=frame_id)]
-    if gtype in (mujoco.mjtGeom.mjGEOM_CAPSULE, mujoco.mjtGeom.mjGEOM_CYLINDER):
+    if gtype in (_CAPSULE, _CYLINDER):
         R = np.empty(9)
         mujoco.mju_quat2Mat(R, np.asarray(quat_wxyz, dtype=float))
         half = R.reshape(3, 3)[:, 2] * size[1]
@@ -110,7 +124,7 @@ def geom_items(
         items: list[SceneItem] = [
             line_strip(entity_id, ends, thickness=2.0 * size[0], color=color, frame_id=frame_id)
         ]
-        if gtype == mujoco.mjtGeom.mjGEOM_CAPSULE:
+        if gtype == _CAPSULE:
             for k, end in enumerate(ends):
                 items.append(
                     sphere(
@@ -161,18 +175,59 @@ def fixture_items(scene: Scene) -> list[SceneItem]:
 
 
 def object_items(scene: Scene, data: mujoco.MjData) -> list[SceneItem]:
-    """The scenario's objects at their current poses (world frame)."""
-    m = scene.model
-    items: list[SceneItem] = []
-    quat = np.empty(4)
-    for name, b in scene.object_body_ids.items():
-        first, count = int(m.body_geomadr[b]), int(m.body_geomnum[b])
-        for g in range(first, first + count):
-            mujoco.mju_mat2Quat(quat, data.geom_xmat[g])
-            items += geom_items(
-                m, g, f"object/{name}/{g}", np.asarray(data.geom_xpos[g]), quat, "world"
-            )
-    return items
+    """The scenario's objects at their current poses (world frame). Called once per sample,
+    a `ViewLogger` keeps an `ObjectItems` instead."""
+    return ObjectItems(scene)(data)
+
+
+class ObjectItems:
+    """`object_items` of one scene, with what is constant over a run worked out once.
+
+    A geom's id, entity id, type, size and colour (`body_geomadr`, `body_geomnum`,
+    `geom_type`, `geom_size`, `geom_matid`, `mat_rgba`, `geom_rgba`) are MjModel fields nothing
+    changes after the scene is compiled, so per call only the pose is read from MjData. The
+    constant parts are those of the item `geom_items` makes for the geom at the origin (a
+    box's size and colour, a sphere's diameter and colour): both paths give the same items to
+    the bit. Geoms that are not one box or sphere item (capsules, cylinders; none among the
+    scenario shapes) go through `geom_items` at every call. A box object costs about 2 us
+    instead of 9 us through `geom_items` (hot caches, measured on this machine).
+    """
+
+    def __init__(self, scene: Scene) -> None:
+        m = scene.model
+        self._model = m
+        self._quat = np.empty(4)  # mju_mat2Quat's output, read before the next geom's call
+        # (geom id, entity id, the item at the origin or None: geom_items at every call)
+        geoms: list[tuple[int, str, Box | Sphere | None]] = []
+        origin, identity = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
+        for name, b in scene.object_body_ids.items():
+            first, count = int(m.body_geomadr[b]), int(m.body_geomnum[b])
+            for g in range(first, first + count):
+                entity_id = f"object/{name}/{g}"
+                items = geom_items(m, g, entity_id, origin, identity, "world")
+                proto = items[0] if len(items) == 1 else None
+                geoms.append((g, entity_id, proto if isinstance(proto, Box | Sphere) else None))
+        self._geoms = tuple(geoms)
+
+    def __call__(self, data: mujoco.MjData) -> list[SceneItem]:
+        """The objects' items at the poses in `data` (world frame)."""
+        xpos, xmat, quat = data.geom_xpos, data.geom_xmat, self._quat
+        items: list[SceneItem] = []
+        for g, entity_id, proto in self._geoms:
+            if isinstance(proto, Sphere):  # no orientation
+                px, py, pz = xpos[g].tolist()
+                items.append(Sphere(entity_id, (px, py, pz), proto.diameter, proto.color, "world"))
+                continue
+            mujoco.mju_mat2Quat(quat, xmat[g])
+            if isinstance(proto, Box):
+                px, py, pz = xpos[g].tolist()
+                w, x, y, z = quat.tolist()
+                items.append(
+                    Box(entity_id, (px, py, pz), proto.size, (x, y, z, w), proto.color, "world")
+                )
+            else:
+                items += geom_items(self._model, g, entity_id, np.asarray(xpos[g]), quat, "world")
+        return items
 
 
 def foothold_items(plan: Plan, foot_length: float) -> list[SceneItem]:
@@ -221,9 +276,12 @@ class ViewLogger:
         self._robot = prepare_scene(robot_geometry(scene))
         self._joint_names = list(desc.joint_names)
         self._inv_limits = 1.0 / np.asarray(desc.torque_limits, dtype=float)
-        self._foot_sites = [
-            mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, name) for name in desc.foot_frames
-        ]
+        self._objects = ObjectItems(scene)
+        # Per foot: sole site id (constant in the compiled model), arrow entity id, colour.
+        self._feet = tuple(
+            (mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, name), f"contact/{side}", color)
+            for name, side, color in zip(desc.foot_frames, "LR", FOOT_COLORS, strict=True)
+        )
         self._foot_length = desc.foot_toe + desc.foot_heel
         self._com_prediction: FloatArray | None = None
 
@@ -248,9 +306,12 @@ class ViewLogger:
         `data` holds the state of `sample`; `f_contact_world` (2, 3) N the measured ground
         reaction per foot; `com_prediction` (n, 3) m the MPC's predicted CoM path when the
         MPC ran at this tick (the last one is kept otherwise); `tau` (n_joints,) N m the
-        applied torques. Costs about 30 us per call in the closed loop, scene-grid calls
-        included (the writer encodes the messages later, in batches: about 25 us more per
-        call, then; measured on this machine).
+        applied torques. Costs about 35 us per call on average in the closed loop (package
+        transfer, measured on this machine): about 24 us off the scene grid, about 60 us on
+        it (48, 24 and 104 us when every grid call looked the objects' and feet's constants up
+        in the model). These means include the writer's batch encoding of every queued
+        message, run when one of the call's messages fills its queue (`RunLogWriter._emit`);
+        without it the medians are about 13 us off the grid and 60 us on it.
         """
         t = sample.t
         log = self.log
@@ -265,24 +326,40 @@ class ViewLogger:
         while self._next_scene_ns <= t_ns:
             self._next_scene_ns += self._period_ns
         log.scene(SCENE_ROBOT, t, self._robot)
-        log.scene(topics.SCENE_OBJECTS, t, object_items(self.scene, data))
+        log.scene(topics.SCENE_OBJECTS, t, self._objects(data))
         log.scene(topics.SCENE_CONTACTS, t, self._contact_items(data, f_contact_world))
-        path = self._com_prediction
-        log.scene(
-            SCENE_MPC,
-            t,
-            [] if path is None or len(path) < 2 else [line_strip("mpc/com", path, color=MPC_COLOR)],
-        )
+        log.scene(SCENE_MPC, t, self._mpc_items())
 
     def _contact_items(self, data: mujoco.MjData, f_contact_world: FloatArray) -> list[SceneItem]:
+        """An arrow per foot carrying at least `CONTACT_MIN_N`, at its sole site: the items
+        `locoplan.log.scene.force_arrow` makes, built directly from the lists of the values
+        (its conversions of array arguments cost more than the arrows)."""
+        # Contiguous rows, as np.linalg.norm's ravel makes them, for the same dot product.
+        forces = np.ascontiguousarray(f_contact_world, dtype=np.float64)
+        site_xpos = data.site_xpos
+        s = CONTACT_M_PER_N
         items: list[SceneItem] = []
-        for k, (site, f) in enumerate(zip(self._foot_sites, f_contact_world, strict=True)):
-            if float(np.linalg.norm(f)) < CONTACT_MIN_N:
+        for (site, entity_id, color), f in zip(self._feet, forces, strict=True):
+            # |f| as np.linalg.norm computes it, sqrt(f . f), without its dispatch.
+            if math.sqrt(f.dot(f)) < CONTACT_MIN_N:
                 continue
-            items.append(
-                force_arrow(f"contact/{'LR'[k]}", data.site_xpos[site], f, color=FOOT_COLORS[k])
-            )
+            fx, fy, fz = f.tolist()
+            px, py, pz = site_xpos[site].tolist()
+            items.append(Arrow(entity_id, (px, py, pz), (fx * s, fy * s, fz * s), color=color))
         return items
+
+    def _mpc_items(self) -> list[SceneItem]:
+        """The last MPC prediction as the line strip `line_strip` makes, from one list of its
+        rows (none before the first prediction or for one of fewer than two points)."""
+        path = self._com_prediction
+        if path is None or len(path) < 2:
+            return []
+        if path.ndim != 2 or path.shape[1] != 3:
+            raise ValueError(
+                f"line strip 'mpc/com': points must have shape (n, 3), got {path.shape}"
+            )
+        points = tuple(map(tuple, path.tolist()))
+        return [LineStrip("mpc/com", points, MPC_THICKNESS, MPC_COLOR, "world")]
 
 
 def sample_from_data(
