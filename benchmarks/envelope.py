@@ -144,6 +144,12 @@ def failure_cause(outcome: Outcome) -> str:
     return "other"
 
 
+def refused_by_planner(outcome: Outcome) -> bool:
+    """Whether a run was refused by the plan compiler before simulating (the batch reports
+    it as an error whose message starts "cannot plan")."""
+    return outcome.status == "error" and outcome.message.startswith("cannot plan")
+
+
 def verdict(result: BatchResult, family: str, strategy: str) -> Verdict:
     """Classify one batch result (see the module docstring)."""
     case, outcome = result.case, result.outcome
@@ -157,7 +163,7 @@ def verdict(result: BatchResult, family: str, strategy: str) -> Verdict:
     wall = outcome.wall_time
     if outcome.status == "passed":
         return Verdict(path, family, strategy, "succeeded", "", "", rtf, wall)
-    if outcome.status == "error" and outcome.message.startswith("cannot plan"):
+    if refused_by_planner(outcome):
         m = _INFEASIBLE.search(outcome.message)
         reason = m.group(1).strip() if m else "plan"
         return Verdict(path, family, strategy, "refused", reason, outcome.message, None, wall)
@@ -204,7 +210,9 @@ class _Progress:
     def finished(self, outcome: Outcome) -> None:
         self.done += 1
         note = f" {outcome.wall_time:.0f} s" if outcome.wall_time else ""
-        line = f"[{self.done}/{self.total}] {outcome.status:7s} {outcome.job_id}{note}"
+        # (A refusal before simulating is counted as refused in the report: say so here too.)
+        status = "refused" if refused_by_planner(outcome) else outcome.status
+        line = f"[{self.done}/{self.total}] {status:7s} {outcome.job_id}{note}"
         self.console.print(line, markup=False, highlight=False)
 
 
