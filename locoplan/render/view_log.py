@@ -33,13 +33,12 @@ import numpy.typing as npt
 
 from locoplan.log import topics
 from locoplan.log.scene import (
-    Arrow,
     Box,
-    LineStrip,
     Rgba,
     SceneItem,
     Sphere,
     box,
+    force_arrow,
     line_strip,
     prepare_scene,
     sphere,
@@ -56,13 +55,11 @@ SCENE_MPC = "/scene/mpc"
 TORQUE_RATIO = "/robot/torque_ratio"
 VISIBLE_GROUPS = 3  # MuJoCo draws geom groups 0..2 by default; group 3+ is hidden detail
 CONTACT_MIN_N = 1.0  # N: below this a foot is not drawn as carrying load
-CONTACT_M_PER_N = 0.002  # m per N: a contact arrow's length per newton (force_arrow's default)
 FOOTHOLD_WIDTH = 0.05  # m, drawn foothold width (the sole is a line of three spheres)
 FOOTHOLD_THICKNESS = 0.002  # m
 FOOT_COLORS = (Rgba(0.2, 0.75, 0.3, 0.6), Rgba(0.2, 0.4, 0.9, 0.6))  # left green, right blue
 MPC_COLOR = Rgba(0.85, 0.1, 0.6, 1.0)
 FIXTURE_COLOR = Rgba(0.55, 0.4, 0.25, 1.0)
-MPC_THICKNESS = 0.01  # m, the CoM prediction's line (line_strip's default)
 
 # MuJoCo's geom types as plain ints: looking up an `mjtGeom` member and comparing with it costs
 # about a microsecond, an int comparison a few tens of nanoseconds.
@@ -331,35 +328,22 @@ class ViewLogger:
         log.scene(SCENE_MPC, t, self._mpc_items())
 
     def _contact_items(self, data: mujoco.MjData, f_contact_world: FloatArray) -> list[SceneItem]:
-        """An arrow per foot carrying at least `CONTACT_MIN_N`, at its sole site: the items
-        `locoplan.log.scene.force_arrow` makes, built directly from the lists of the values
-        (its conversions of array arguments cost more than the arrows)."""
-        # Contiguous rows, as np.linalg.norm's ravel makes them, for the same dot product.
-        forces = np.ascontiguousarray(f_contact_world, dtype=np.float64)
+        """A `force_arrow` per foot carrying at least `CONTACT_MIN_N`, at its sole site."""
         site_xpos = data.site_xpos
-        s = CONTACT_M_PER_N
         items: list[SceneItem] = []
-        for (site, entity_id, color), f in zip(self._feet, forces, strict=True):
-            # |f| as np.linalg.norm computes it, sqrt(f . f), without its dispatch.
-            if math.sqrt(f.dot(f)) < CONTACT_MIN_N:
+        for (site, entity_id, color), f in zip(self._feet, f_contact_world, strict=True):
+            if float(np.linalg.norm(f)) < CONTACT_MIN_N:
                 continue
-            fx, fy, fz = f.tolist()
-            px, py, pz = site_xpos[site].tolist()
-            items.append(Arrow(entity_id, (px, py, pz), (fx * s, fy * s, fz * s), color=color))
+            items.append(force_arrow(entity_id, site_xpos[site], f, color=color))
         return items
 
     def _mpc_items(self) -> list[SceneItem]:
-        """The last MPC prediction as the line strip `line_strip` makes, from one list of its
-        rows (none before the first prediction or for one of fewer than two points)."""
+        """The last MPC prediction as a line strip (none before the first prediction or for
+        one of fewer than two points)."""
         path = self._com_prediction
         if path is None or len(path) < 2:
             return []
-        if path.ndim != 2 or path.shape[1] != 3:
-            raise ValueError(
-                f"line strip 'mpc/com': points must have shape (n, 3), got {path.shape}"
-            )
-        points = tuple(map(tuple, path.tolist()))
-        return [LineStrip("mpc/com", points, MPC_THICKNESS, MPC_COLOR, "world")]
+        return [line_strip("mpc/com", path, color=MPC_COLOR)]
 
 
 def sample_from_data(
