@@ -1014,11 +1014,9 @@ HEAVY_PICK_MIN = 2.0
 def _slow_heavy_standing_picks(
     scenario: Scenario, tasks: tuple[PlannedTask, ...], plan: Plan
 ) -> tuple[tuple[PlannedTask, ...], tuple[str, ...]]:
-    """The tasks with each pick of a heavy object held standing (`_heavy_standing`) that is
-    written shorter than HEAVY_PICK_MIN lasting that long (same start), where only stand tasks
-    start before its new end, and a note for each."""
-    from locoplan.plan.hand_paths import world_to_trunk
-
+    """The tasks with each pick of a heavy object held standing (`_heavy_standing_ahead`) that
+    is written shorter than HEAVY_PICK_MIN lasting that long (same start), where only stand
+    tasks start before its new end, and a note for each."""
     if not plan.holds:
         return tasks, ()
     leg = _leg_torque(scenario.robot)
@@ -1028,11 +1026,9 @@ def _slow_heavy_standing_picks(
         pick = by_index[hold.pick_task]
         if pick.duration >= HEAVY_PICK_MIN - 1e-9:
             continue
-        if not _heavy_standing(tasks, plan, hold, leg):
+        ahead = _heavy_standing_ahead(tasks, plan, hold, leg)
+        if ahead is None:
             continue
-        grip = _task_segment(plan, pick.index, "grip")
-        assert grip is not None  # (`_heavy_standing` found it)
-        ahead = world_to_trunk(plan.trunk, grip.t1, grip.end.point)[0]
         end = pick.start + HEAVY_PICK_MIN
         if any(
             t.index != pick.index and t.kind != "stand" and pick.start <= t.start < end
@@ -1055,13 +1051,13 @@ def _slow_heavy_standing_picks(
     return tuple(by_index[t.index] for t in tasks), tuple(notes)
 
 
-def _heavy_standing(
+def _heavy_standing_ahead(
     tasks: tuple[PlannedTask, ...], plan: Plan, hold: ObjectHold, leg: float
-) -> bool:
-    """Whether `hold` picks a heavy object (`hand_paths.heavy_pull` for the robot's hip pitch
-    torque `leg`, N m, at its world grip point's distance ahead of the trunk) that the robot
-    holds standing: no locomotion task from the pick's start to its release (or the release
-    task's end)."""
+) -> float | None:
+    """How far ahead of the trunk (m) `hold` grips its object, when it picks a heavy one
+    (`hand_paths.heavy_pull` for the robot's hip pitch torque `leg`, N m, at its world grip
+    point's distance ahead of the trunk) that the robot holds standing (no locomotion task
+    from the pick's start to its release, or the release task's end); None otherwise."""
     from locoplan.plan.hand_paths import heavy_pull, world_to_trunk
 
     by_index = {t.index: t for t in tasks}
@@ -1071,17 +1067,17 @@ def _heavy_standing(
     if release is not None:
         until = max(until, release.end)
     if any(t.kind == "locomotion" and t.start < until and t.end > pick.start for t in tasks):
-        return False
+        return None
     grip = _task_segment(plan, pick.index, "grip")
     if grip is None or grip.end.frame != "world":
-        return False
-    ahead = world_to_trunk(plan.trunk, grip.t1, grip.end.point)[0]
-    return heavy_pull(hold.mass, ahead, leg)
+        return None
+    ahead = float(world_to_trunk(plan.trunk, grip.t1, grip.end.point)[0])
+    return ahead if heavy_pull(hold.mass, ahead, leg) else None
 
 
 def _with_slow_lifts(plan: Plan, robot: str) -> Plan:
     """`plan` with `ObjectHold.slow_lift` set on each heavy object held standing
-    (`_heavy_standing`, not thrown) whose pick lasts HEAVY_PICK_MIN or more (as written or
+    (`_heavy_standing_ahead`, not thrown) whose pick lasts HEAVY_PICK_MIN or more (as written or
     as `_slow_heavy_standing_picks` made it): the picks the planner gave the time for the
     weight to come on slowly. The controller then feeds the hands no more of the weight than
     the load ramp has come to (`LocoManipulationController._lift_mass`)."""
@@ -1093,7 +1089,7 @@ def _with_slow_lifts(plan: Plan, robot: str) -> Plan:
         replace(h, slow_lift=True)
         if h.release_kind != "throw"
         and by_index[h.pick_task].duration >= HEAVY_PICK_MIN - 1e-9
-        and _heavy_standing(plan.tasks, plan, h, leg)
+        and _heavy_standing_ahead(plan.tasks, plan, h, leg) is not None
         else h
         for h in plan.holds
     )

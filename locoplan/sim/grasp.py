@@ -80,7 +80,6 @@ def _weld_forces(
     (10-15 us a tick inside the loop), in one pass over the rows."""
     n_eq = 0
     counts = np.zeros(welds.shape[0], dtype=np.int64)
-    out[:] = np.nan
     for r in range(efc_type.shape[0]):
         if efc_type[r] != equality:
             continue
